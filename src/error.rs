@@ -1,0 +1,92 @@
+//! The error type shared by every solver entry point.
+
+use crate::Method;
+
+/// Why a light matrix could not be computed.
+///
+/// Every variant describes input that no single shadow map can serve (or input
+/// that is malformed); recoverable situations produce a matrix with a
+/// [`Fallback`](crate::Fallback) instead.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LixelError {
+    /// An input value was NaN or infinite.
+    #[error("non-finite input: {what}")]
+    NonFinite {
+        /// Which input held the bad value.
+        what: &'static str,
+    },
+    /// The camera cannot be used (singular matrices, near >= far, zero viewport, ...).
+    #[error("degenerate camera: {reason}")]
+    DegenerateCamera {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// The light cannot be used (zero direction, spot cone of 90 degrees or more, ...).
+    #[error("invalid light: {reason}")]
+    InvalidLight {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// Scene bounds are empty or inverted.
+    #[error("invalid scene bounds: {reason}")]
+    InvalidBounds {
+        /// What is wrong with them.
+        reason: &'static str,
+    },
+    /// A shadow map with zero width or height.
+    #[error("shadow map size must be non-zero, got {width}x{height}")]
+    ZeroMapSize {
+        /// Requested width in texels.
+        width: u32,
+        /// Requested height in texels.
+        height: u32,
+    },
+    /// A point or spot light lies inside the region its map must cover, so the
+    /// directions towards that region span more than a half-space: no single
+    /// planar shadow map can hold them (a cube map is needed).
+    #[error("{method:?}: the light lies inside the region its shadow map must cover")]
+    LightInsideFocus {
+        /// The method that was asked for.
+        method: Method,
+    },
+    /// The light reaches no receiver (a spot light pointing away from the
+    /// scene): there is nothing to map and no shadow to draw.
+    #[error("{method:?}: the light reaches no receiver")]
+    NothingLit {
+        /// The method that was asked for.
+        method: Method,
+    },
+    /// No optical axis puts every relevant point safely in front of the
+    /// light (an internal invariant of the method failed; please report it).
+    #[error("{method:?}: relevant points lie behind the light's image plane")]
+    NotInFront {
+        /// The method that was asked for.
+        method: Method,
+    },
+    /// The receiver plane given to the plane-optimal method is invalid or
+    /// contains the eye.
+    #[error("invalid receiver plane: {reason}")]
+    InvalidPlane {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// The sample set handed to the scene optimizer cannot be used at all.
+    #[error("unusable samples: {reason}")]
+    UnusableSamples {
+        /// What is wrong with them.
+        reason: &'static str,
+    },
+}
+
+/// Result alias used throughout the crate.
+pub type Result<T, E = LixelError> = std::result::Result<T, E>;
+
+/// Returns `Err(NonFinite)` unless every component is finite.
+pub(crate) fn check_finite(values: &[f64], what: &'static str) -> Result<()> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(LixelError::NonFinite { what })
+    }
+}

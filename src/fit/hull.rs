@@ -1,0 +1,189 @@
+//! Planar convex hull: Andrew's monotone chain with exact orientation tests.
+
+use core::cmp::Ordering;
+
+use glam::DVec2;
+use robust::{orient2d, Coord};
+
+/// Exact orientation of the triangle `(a, b, c)`.
+///
+/// Positive when `c` lies strictly left of the directed line `a → b` (the turn
+/// `a → b → c` is counter-clockwise), negative when it lies strictly right and
+/// exactly zero when the three points are collinear. The sign is exact for all
+/// finite inputs (Shewchuk's adaptive predicate, via the `robust` crate).
+#[inline]
+#[must_use]
+pub(crate) fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    orient2d(Coord { x: a.x, y: a.y }, Coord { x: b.x, y: b.y }, Coord { x: c.x, y: c.y })
+}
+
+/// Lexicographic order on `(x, y)`.
+///
+/// Only ever applied to finite points, where `partial_cmp` is total; `-0.0` and
+/// `0.0` compare equal, so equal points end up adjacent for deduplication.
+fn lexicographic(a: &DVec2, b: &DVec2) -> Ordering {
+    a.x.partial_cmp(&b.x).unwrap_or(Ordering::Equal).then_with(|| a.y.partial_cmp(&b.y).unwrap_or(Ordering::Equal))
+}
+
+/// Convex hull of a planar point set.
+///
+/// Returns the hull's vertices in counter-clockwise order, starting at the
+/// lexicographically smallest point (least `x`, then least `y`), without
+/// repeating the first vertex at the end. The hull is *strictly* convex: points
+/// on the interior of a hull edge are not vertices, and every vertex is one of
+/// the input points, bit for bit.
+///
+/// Degenerate inputs give short hulls: no points give an empty hull, a single
+/// distinct point (possibly repeated) gives that point, and collinear points
+/// give the two extreme points of the line they span.
+///
+/// Non-finite points have no place in a hull: the caller is expected to filter
+/// or reject them (as [`fit_affine`](super::fit_affine) does). Here they are
+/// skipped, so that the function never panics.
+///
+/// This allocates its result and a sorting buffer; repeated callers should use
+/// [`convex_hull_2d_into`].
+///
+/// # Algorithm
+///
+/// Andrew's monotone chain: sort the points, then build the lower and upper
+/// chains in one sweep each, popping a vertex whenever it does not make a
+/// strict left turn. The turn test is Shewchuk's adaptive exact `orient2d`, so
+/// the result is the exact hull of the (finite) input points, with no
+/// tolerance involved. `O(n log n)` time for `n` points, `O(n)` memory.
+#[must_use]
+pub fn convex_hull_2d(points: &[DVec2]) -> Vec<DVec2> {
+    let mut sorted = Vec::with_capacity(points.len());
+    let mut hull = Vec::new();
+    convex_hull_2d_into(points, &mut sorted, &mut hull);
+    hull
+}
+
+/// Allocation-free form of [`convex_hull_2d`].
+///
+/// Writes the hull of `points` to `hull`, replacing its contents. `scratch` is
+/// a working buffer whose contents on entry are ignored and on return are
+/// unspecified (currently the sorted, deduplicated finite points). Once both
+/// buffers have grown to fit the largest input, repeated calls do not
+/// allocate.
+///
+/// Output order, degenerate cases and the handling of non-finite points are
+/// those of [`convex_hull_2d`].
+///
+/// # Algorithm
+///
+/// Andrew's monotone chain with exact orientation tests; `O(n log n)` time for
+/// `n` points. See [`convex_hull_2d`].
+pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
+    scratch.clear();
+    scratch.extend(points.iter().copied().filter(|p| p.is_finite()));
+    scratch.sort_unstable_by(lexicographic);
+    scratch.dedup();
+
+    hull.clear();
+    if scratch.len() <= 2 {
+        // Zero, one or two distinct points: already their own hull, and two
+        // points in lexicographic order are a valid (degenerate) CCW polygon.
+        hull.extend_from_slice(scratch);
+        return;
+    }
+
+    // A hull vertex must make a strict left turn with its neighbours; anything
+    // that turns right or goes straight on is popped.
+    let turns_left = |hull: &[DVec2], p: DVec2| orient(hull[hull.len() - 2], hull[hull.len() - 1], p) > 0.0;
+
+    // Lower chain, left to right.
+    for &p in scratch.iter() {
+        while hull.len() >= 2 && !turns_left(hull, p) {
+            hull.pop();
+        }
+        hull.push(p);
+    }
+
+    // Upper chain, right to left. The last point of the lower chain (the
+    // rightmost point) stays; the upper chain may pop only its own vertices.
+    let lower_len = hull.len();
+    for &p in scratch.iter().rev().skip(1) {
+        while hull.len() > lower_len && !turns_left(hull, p) {
+            hull.pop();
+        }
+        hull.push(p);
+    }
+
+    // The upper chain ends at the first (leftmost) point, which is already the
+    // hull's first vertex.
+    hull.pop();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64, y: f64) -> DVec2 {
+        DVec2::new(x, y)
+    }
+
+    #[test]
+    fn empty_single_and_pair() {
+        assert!(convex_hull_2d(&[]).is_empty());
+        assert_eq!(convex_hull_2d(&[v(1.0, 2.0)]), vec![v(1.0, 2.0)]);
+        assert_eq!(convex_hull_2d(&[v(1.0, 2.0), v(1.0, 2.0), v(1.0, 2.0)]), vec![v(1.0, 2.0)]);
+        assert_eq!(convex_hull_2d(&[v(3.0, 0.0), v(1.0, 2.0)]), vec![v(1.0, 2.0), v(3.0, 0.0)]);
+    }
+
+    #[test]
+    fn square_with_interior_edge_and_duplicate_points() {
+        let points = [
+            v(1.0, 1.0),
+            v(0.0, 0.0),
+            v(0.5, 0.0),
+            v(1.0, 0.0),
+            v(0.5, 0.5),
+            v(0.0, 1.0),
+            v(1.0, 0.5),
+            v(0.0, 0.0),
+            v(1.0, 1.0),
+        ];
+        assert_eq!(convex_hull_2d(&points), vec![v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)]);
+    }
+
+    #[test]
+    fn collinear_points_give_the_extremes() {
+        let points: Vec<_> = (0..10).map(|i| v(f64::from(i), 2.0 * f64::from(i))).collect();
+        assert_eq!(convex_hull_2d(&points), vec![v(0.0, 0.0), v(9.0, 18.0)]);
+        let vertical = [v(0.0, 3.0), v(0.0, -1.0), v(-0.0, 2.0), v(0.0, 0.0)];
+        assert_eq!(convex_hull_2d(&vertical), vec![v(0.0, -1.0), v(0.0, 3.0)]);
+    }
+
+    #[test]
+    fn nearly_collinear_points_are_decided_exactly() {
+        // The middle point lies below the chord by far less than the rounding
+        // error of a naive cross product at this magnitude.
+        let a = v(1.0e6, 1.0e6);
+        let b = v(1.0e6 + 3.0, 1.0e6 + 3.0);
+        let below = v(1.0e6 + 1.0, 1.0e6 + 1.0 - 1.0e-10);
+        let hull = convex_hull_2d(&[a, b, below]);
+        assert_eq!(hull, vec![a, below, b]);
+        let on = v(1.0e6 + 1.0, 1.0e6 + 1.0);
+        assert_eq!(convex_hull_2d(&[a, b, on]), vec![a, b]);
+    }
+
+    #[test]
+    fn non_finite_points_are_skipped() {
+        let points =
+            [v(f64::NAN, 0.0), v(0.0, 0.0), v(f64::INFINITY, 1.0), v(1.0, 0.0), v(0.0, f64::NEG_INFINITY), v(0.0, 1.0)];
+        assert_eq!(convex_hull_2d(&points), vec![v(0.0, 0.0), v(1.0, 0.0), v(0.0, 1.0)]);
+        assert!(convex_hull_2d(&[v(f64::NAN, f64::NAN)]).is_empty());
+    }
+
+    #[test]
+    fn buffers_are_reused_and_overwritten() {
+        let mut scratch = vec![v(9.0, 9.0); 3];
+        let mut hull = vec![v(7.0, 7.0); 5];
+        let triangle = [v(0.0, 0.0), v(2.0, 0.0), v(0.0, 2.0), v(0.5, 0.5)];
+        convex_hull_2d_into(&triangle, &mut scratch, &mut hull);
+        assert_eq!(hull, vec![v(0.0, 0.0), v(2.0, 0.0), v(0.0, 2.0)]);
+        convex_hull_2d_into(&[v(1.0, 1.0)], &mut scratch, &mut hull);
+        assert_eq!(hull, vec![v(1.0, 1.0)]);
+    }
+}

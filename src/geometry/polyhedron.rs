@@ -1,0 +1,1034 @@
+//! Convex polyhedra with index-shared faces, built from boxes and frusta and
+//! cut by half-spaces.
+
+use std::collections::{HashMap, HashSet};
+
+use glam::DVec3;
+
+use super::{accurate_cross, default_eps, Plane};
+
+/// The faces of a box or frustum as loops of corner indices.
+///
+/// Bit 0 of a corner index selects x (0: minimum, or NDC x = -1), bit 1
+/// selects y, bit 2 selects z (0: minimum, or the near plane). The loops are
+/// counter-clockwise seen from outside when the corners are laid out with the
+/// orientation of the index bits, as in an axis-aligned box; for the mirrored
+/// layout every loop runs the other way.
+const BOX_FACES: [[usize; 4]; 6] = [
+    [0, 4, 6, 2], // -x
+    [1, 3, 7, 5], // +x
+    [0, 1, 5, 4], // -y
+    [2, 6, 7, 3], // +y
+    [0, 2, 3, 1], // -z, near
+    [4, 5, 7, 6], // +z, far
+];
+
+/// One face of a [`ConvexPolyhedron`]: an outward plane and a loop of vertex
+/// indices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Face {
+    plane: Plane,
+    indices: Vec<usize>,
+}
+
+impl Face {
+    /// The face's plane, its normal pointing out of the polyhedron.
+    ///
+    /// This is the exact plane the face came from (a box side, a frustum side,
+    /// a clipping plane), never one refitted to the vertices, which lie on it
+    /// to within rounding and the tolerance of the operations that made them.
+    #[must_use]
+    pub fn plane(&self) -> Plane {
+        self.plane
+    }
+
+    /// Indices into [`ConvexPolyhedron::vertices`] of the face's corners,
+    /// counter-clockwise seen from outside (from where the normal points);
+    /// at least three, all distinct. Two adjacent faces share the indices of
+    /// their common edge and traverse it in opposite directions.
+    #[must_use]
+    pub fn indices(&self) -> &[usize] {
+        &self.indices
+    }
+
+    /// The directed edges `(from, to)` of the loop, in order.
+    pub fn edges(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let next = self.indices.iter().cycle().skip(1);
+        self.indices.iter().copied().zip(next.copied())
+    }
+}
+
+/// A bounded convex polyhedron: indexed vertices and faces with outward
+/// planes.
+///
+/// Either empty (no vertices, no faces) or closed: at least four faces, every
+/// vertex used by some face, and every directed edge `(a, b)` of a face
+/// matched by the edge `(b, a)` of exactly one other face. Edges are shared
+/// by index, so silhouettes can be found by comparing face orientations.
+/// Faces keep the exact planes they came from; they are not merged, so
+/// coplanar neighbours and collinear vertices may occur after clipping.
+///
+/// All operations take a distance tolerance `eps`; see
+/// [`ConvexPolyhedron::default_eps`]. Non-finite input never panics: it
+/// yields an empty body, `None` or an empty plane list as documented.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ConvexPolyhedron {
+    vertices: Vec<DVec3>,
+    faces: Vec<Face>,
+}
+
+/// Where a vertex lies relative to a clipping plane, with tolerance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Side {
+    Inside,
+    On,
+    Outside,
+}
+
+impl Side {
+    fn of(distance: f64, eps: f64) -> Side {
+        if distance > eps {
+            Side::Outside
+        } else if distance < -eps {
+            Side::Inside
+        } else {
+            Side::On
+        }
+    }
+
+    /// Whether an edge between the two sides crosses the plane strictly.
+    fn is_opposite(self, other: Side) -> bool {
+        matches!((self, other), (Side::Inside, Side::Outside) | (Side::Outside, Side::Inside))
+    }
+}
+
+/// The hole in an open surface of faces.
+enum Rim {
+    /// No hole.
+    Closed,
+    /// The loop of boundary vertices, in the order a face filling the hole
+    /// runs (counter-clockwise from outside).
+    Loop(Vec<usize>),
+    /// The boundary is not one simple loop (numerically degenerate input):
+    /// its vertices, without order.
+    Tangled(Vec<usize>),
+}
+
+impl ConvexPolyhedron {
+    /// The empty polyhedron.
+    #[must_use]
+    pub fn empty() -> Self {
+        Self::default()
+    }
+
+    /// Whether the polyhedron is empty (has no faces).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
+
+    /// The vertices, indexed by [`Face::indices`].
+    #[must_use]
+    pub fn vertices(&self) -> &[DVec3] {
+        &self.vertices
+    }
+
+    /// The faces.
+    #[must_use]
+    pub fn faces(&self) -> &[Face] {
+        &self.faces
+    }
+
+    /// The face planes: the polyhedron is the intersection of their insides.
+    pub fn planes(&self) -> impl ExactSizeIterator<Item = Plane> + '_ {
+        self.faces.iter().map(Face::plane)
+    }
+
+    /// The mean of the vertices (an interior point of a non-degenerate
+    /// body; not the centre of mass). `DVec3::ZERO` when empty.
+    #[must_use]
+    pub fn centroid(&self) -> DVec3 {
+        if self.vertices.is_empty() {
+            return DVec3::ZERO;
+        }
+        self.vertices.iter().sum::<DVec3>() / self.vertices.len() as f64
+    }
+
+    /// The diagonal of the bounding box; `0.0` when empty.
+    #[must_use]
+    pub fn scale(&self) -> f64 {
+        self.aabb().map_or(0.0, |(min, max)| (max - min).length())
+    }
+
+    /// The default tolerance for this body: [`default_eps`] of its
+    /// [`scale`](Self::scale), but of at least `1e-3` times its largest
+    /// coordinate magnitude, so that a small body far from the origin still
+    /// gets a tolerance well above the rounding of its coordinates.
+    #[must_use]
+    pub fn default_eps(&self) -> f64 {
+        let magnitude = self.vertices.iter().fold(0.0, |m: f64, v| m.max(v.abs().max_element()));
+        default_eps(self.scale().max(1e-3 * magnitude))
+    }
+
+    /// Whether `p` lies inside every face plane, up to `eps`. Always `false`
+    /// when empty or for a NaN point.
+    #[must_use]
+    pub fn contains(&self, p: DVec3, eps: f64) -> bool {
+        !self.is_empty() && self.faces.iter().all(|f| f.plane.signed_distance(p) <= eps)
+    }
+
+    /// The bounding box `(min, max)`; `None` when empty.
+    #[must_use]
+    pub fn aabb(&self) -> Option<(DVec3, DVec3)> {
+        let first = *self.vertices.first()?;
+        Some(self.vertices.iter().fold((first, first), |(min, max), &v| (min.min(v), max.max(v))))
+    }
+
+    /// The enclosed volume; `0.0` when empty.
+    ///
+    /// # Algorithm
+    ///
+    /// Each face is fanned into triangles, and the signed volumes of the
+    /// tetrahedra they span with the centroid are summed (the divergence
+    /// theorem); taking the centroid as apex keeps the terms small.
+    #[must_use]
+    pub fn volume(&self) -> f64 {
+        let c = self.centroid();
+        let mut six_volume = 0.0;
+        for face in &self.faces {
+            let v0 = self.vertices[face.indices[0]] - c;
+            for pair in face.indices[1..].windows(2) {
+                let (v1, v2) = (self.vertices[pair[0]] - c, self.vertices[pair[1]] - c);
+                six_volume += v0.dot(v1.cross(v2));
+            }
+        }
+        six_volume / 6.0
+    }
+
+    /// The axis-aligned box `[min, max]`.
+    ///
+    /// A box thinner than `pad = 1e-9 * |max - min| + 1e-12 + 64 ε |coordinates|`
+    /// in some axis (flat or a single point) is padded symmetrically to
+    /// thickness `pad` there: the result is a superset of the input, thin
+    /// enough not to matter and thick enough that every face stays
+    /// well-defined (the last term keeps the padding above the spacing of
+    /// `f64` values at the box's coordinates). Empty when `min > max` in any
+    /// axis or any coordinate is not finite.
+    #[must_use]
+    pub fn from_aabb(min: DVec3, max: DVec3) -> Self {
+        let Some((min, max)) = padded_box(min, max) else {
+            return Self::empty();
+        };
+        let pick = |bit: bool, lo: f64, hi: f64| if bit { hi } else { lo };
+        let vertices = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    pick(i & 1 != 0, min.x, max.x),
+                    pick(i & 2 != 0, min.y, max.y),
+                    pick(i & 4 != 0, min.z, max.z),
+                )
+            })
+            .collect();
+        let faces = BOX_FACES
+            .iter()
+            .zip(box_planes(min, max))
+            .map(|(indices, plane)| Face { plane, indices: indices.to_vec() })
+            .collect();
+        Self { vertices, faces }
+    }
+
+    /// The frustum (any hexahedron with planar, convex faces) with the given
+    /// corners.
+    ///
+    /// Corner `i` has NDC x = -1 if bit 0 of `i` is clear and +1 if it is
+    /// set; bit 1 likewise selects y; bit 2 selects the near (clear) or far
+    /// (set) plane. Either handedness works: faces are oriented outwards
+    /// using the corners' centroid.
+    ///
+    /// Returns `None` if a corner is not finite, a face has no area, the
+    /// centroid is not more than the [default tolerance](default_eps) inside
+    /// every face, or a corner lies outside a face plane by more than that
+    /// tolerance (twisted or non-convex corners). A frustum whose near plane
+    /// is a single point (a pyramid) is therefore rejected.
+    ///
+    /// # Algorithm
+    ///
+    /// Each face plane is the Newell normal of its quad through the quad's
+    /// centre, which is exact for planar quads and a least-squares fit
+    /// otherwise.
+    #[must_use]
+    pub fn from_frustum_corners(corners: &[DVec3; 8]) -> Option<Self> {
+        if !corners.iter().all(|c| c.is_finite()) {
+            return None;
+        }
+        let (min, max) = corners[1..].iter().fold((corners[0], corners[0]), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+        let magnitude = min.abs().max(max.abs()).max_element();
+        let eps = default_eps((max - min).length().max(1e-3 * magnitude));
+        let centroid = corners.iter().sum::<DVec3>() / 8.0;
+
+        let mut faces = Vec::with_capacity(6);
+        let mut inward = 0;
+        for indices in &BOX_FACES {
+            let quad = indices.map(|i| corners[i]);
+            let center = quad.iter().sum::<DVec3>() / 4.0;
+            let newell: DVec3 = (0..4).map(|k| (quad[k] - center).cross(quad[(k + 1) % 4] - center)).sum();
+            let normal = newell.try_normalize()?;
+            let plane = Plane { normal, offset: -normal.dot(center) };
+            let d = plane.signed_distance(centroid);
+            if d > eps {
+                inward += 1;
+            } else if d >= -eps {
+                return None;
+            }
+            faces.push(Face { plane, indices: indices.to_vec() });
+        }
+        match inward {
+            0 => {}
+            6 => {
+                for face in &mut faces {
+                    face.plane = face.plane.flipped();
+                    face.indices.reverse();
+                }
+            }
+            _ => return None,
+        }
+        let convex = faces.iter().all(|f| corners.iter().all(|&c| f.plane.signed_distance(c) <= eps));
+        convex.then(|| Self { vertices: corners.to_vec(), faces })
+    }
+
+    /// The part of the polyhedron inside `plane` (signed distance `<= 0`).
+    ///
+    /// Vertices within `eps` of the plane count as on it and are kept as they
+    /// are. If no vertex lies more than `eps` outside, the polyhedron is
+    /// returned unchanged; if none lies more than `eps` inside, the result is
+    /// empty (what would remain is at most `eps` thick). A non-finite plane
+    /// gives an empty result; a negative or NaN `eps` counts as zero.
+    ///
+    /// # Algorithm
+    ///
+    /// Each face loop is clipped Sutherland–Hodgman style. An edge crossing
+    /// the plane strictly (one end more than `eps` inside, the other more
+    /// than `eps` outside) gets one new vertex, shared by both faces of the
+    /// edge through a cache keyed by the edge's sorted vertex pair; edges
+    /// ending on the plane get none. Faces left with fewer than three
+    /// vertices are dropped. The surviving faces then have a single hole,
+    /// bounded by on-plane vertices; the cap face filling it follows the
+    /// hole's boundary edges in reverse, so the result is closed and
+    /// index-shared by construction. (Should rounding ever tangle that
+    /// boundary, the cap falls back to its vertices sorted by angle around
+    /// their centroid.) The cap's plane is `plane` itself; other faces keep
+    /// their planes; unused vertices are dropped.
+    #[must_use]
+    pub fn clip(&self, plane: &Plane, eps: f64) -> Self {
+        if self.is_empty() || !plane.is_finite() {
+            return Self::empty();
+        }
+        let eps = eps.max(0.0);
+        let dist: Vec<f64> = self.vertices.iter().map(|&v| plane.signed_distance(v)).collect();
+        let side: Vec<Side> = dist.iter().map(|&d| Side::of(d, eps)).collect();
+        if !side.contains(&Side::Outside) {
+            return self.clone();
+        }
+        if !side.contains(&Side::Inside) {
+            return Self::empty();
+        }
+
+        // Kept vertices first, under their new indices; cut points follow.
+        let mut vertices = Vec::with_capacity(self.vertices.len() + 8);
+        let mut new_index = vec![usize::MAX; self.vertices.len()];
+        for (i, &v) in self.vertices.iter().enumerate() {
+            if side[i] != Side::Outside {
+                new_index[i] = vertices.len();
+                vertices.push(v);
+            }
+        }
+        let mut cuts: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut faces = Vec::with_capacity(self.faces.len() + 1);
+        for face in &self.faces {
+            let mut indices = Vec::with_capacity(face.indices.len() + 1);
+            for (a, b) in face.edges() {
+                if side[a] != Side::Outside {
+                    indices.push(new_index[a]);
+                }
+                if side[a].is_opposite(side[b]) {
+                    let key = (a.min(b), a.max(b));
+                    let cut = *cuts.entry(key).or_insert_with(|| {
+                        let (i, j) = key;
+                        let t = dist[i] / (dist[i] - dist[j]);
+                        vertices.push(self.vertices[i].lerp(self.vertices[j], t));
+                        vertices.len() - 1
+                    });
+                    indices.push(cut);
+                }
+            }
+            if indices.len() >= 3 {
+                faces.push(Face { plane: face.plane, indices });
+            }
+        }
+
+        let cap = match rim(&faces, &half_edge_faces(&faces)) {
+            Rim::Closed => Vec::new(),
+            Rim::Loop(indices) => indices,
+            Rim::Tangled(indices) => sort_around(&vertices, indices, plane.normal),
+        };
+        if cap.len() >= 3 {
+            faces.push(Face { plane: *plane, indices: cap });
+        }
+        Self::from_parts(vertices, faces)
+    }
+
+    /// The polyhedron clipped by every plane in turn (see [`clip`](Self::clip)).
+    #[must_use]
+    pub fn clip_all<'a>(&self, planes: impl IntoIterator<Item = &'a Plane>, eps: f64) -> Self {
+        let mut body = self.clone();
+        for plane in planes {
+            if body.is_empty() {
+                break;
+            }
+            body = body.clip(plane, eps);
+        }
+        body
+    }
+
+    /// The intersection with the box `[min, max]`, padded like
+    /// [`from_aabb`](Self::from_aabb) when flat; empty for an invalid box.
+    #[must_use]
+    pub fn intersect_aabb(&self, min: DVec3, max: DVec3, eps: f64) -> Self {
+        match padded_box(min, max) {
+            Some((min, max)) => self.clip_all(&box_planes(min, max), eps),
+            None => Self::empty(),
+        }
+    }
+
+    /// The half-spaces whose intersection is `conv(self ∪ {p})`.
+    ///
+    /// These are the planes of the faces that do not see `p` (`p` at most
+    /// `eps` outside them), plus, for each silhouette edge between a face
+    /// that sees `p` and one that does not, the plane through the edge and
+    /// `p`, oriented outwards. When `p` is inside (within `eps`), these are
+    /// just the face planes.
+    ///
+    /// Every plane returned has all vertices of `self` and `p` inside it to
+    /// within `eps` (a plane that rounding would tilt through the body is
+    /// moved outwards), so the half-spaces always contain the hull; for
+    /// non-degenerate input they describe it exactly. Empty when `self` is
+    /// empty or `p` is not finite: there is then nothing to bound, and the
+    /// caller must not read the empty list as "everywhere".
+    ///
+    /// # Algorithm
+    ///
+    /// A silhouette plane through edge `(a, b)` of a face seeing `p` has
+    /// normal `(b - a) × (p - a)` (the new face `a, b, p` is
+    /// counter-clockwise from outside), evaluated with fused multiply-adds
+    /// so that it passes within rounding of `a`, `b` and `p`. If the
+    /// neighbour across the edge has `p` outside it by at most `eps`, the
+    /// plane through edge and `p` would cut that neighbour; the neighbour's
+    /// own plane, already in the list, bounds the hull there instead.
+    #[must_use]
+    pub fn hull_with_point_planes(&self, p: DVec3, eps: f64) -> Vec<Plane> {
+        if self.is_empty() || !p.is_finite() {
+            return Vec::new();
+        }
+        let dist: Vec<f64> = self.planes().map(|plane| plane.signed_distance(p)).collect();
+        let sees_p: Vec<bool> = dist.iter().map(|&d| d > eps).collect();
+        let mut planes: Vec<Plane> = self.planes().zip(&sees_p).filter(|&(_, &sees)| !sees).map(|(plane, _)| plane).collect();
+        for (a, b, neighbour) in self.silhouette(&sees_p) {
+            if dist[neighbour] <= 0.0 {
+                planes.extend(self.cone_plane(a, b, p, eps));
+            }
+        }
+        planes
+    }
+
+    /// The convex hull `conv(self ∪ {p})`.
+    ///
+    /// A clone when `p` is inside (within `eps`); empty when `self` is empty
+    /// or `p` is not finite. Faces that see `p` (`p` more than `eps` outside
+    /// them) are replaced by triangles joining `p` to the silhouette; the
+    /// other faces and their vertex indices are kept. The planes are those
+    /// of [`hull_with_point_planes`](Self::hull_with_point_planes).
+    ///
+    /// # Algorithm
+    ///
+    /// The faces not seeing `p` form a surface with one hole, whose boundary
+    /// is the silhouette; each boundary edge `(a, b)`, taken in the hole's
+    /// orientation, gets the triangle `(a, b, p)`. If rounding ever tangles
+    /// that boundary, the hull is instead built by clipping a box around
+    /// `self` and `p` by the hull's planes.
+    #[must_use]
+    pub fn hull_with_point(&self, p: DVec3, eps: f64) -> Self {
+        if self.is_empty() || !p.is_finite() {
+            return Self::empty();
+        }
+        let (kept, kept_dist): (Vec<Face>, Vec<f64>) = self
+            .faces
+            .iter()
+            .map(|face| (face.clone(), face.plane.signed_distance(p)))
+            .filter(|&(_, d)| d <= eps)
+            .unzip();
+        if kept.len() == self.faces.len() {
+            return self.clone();
+        }
+        let edge_faces = half_edge_faces(&kept);
+        let Rim::Loop(silhouette) = rim(&kept, &edge_faces) else {
+            return self.hull_by_clipping(p, eps);
+        };
+
+        let apex = self.vertices.len();
+        let mut vertices = self.vertices.clone();
+        vertices.push(p);
+        let mut faces = kept.clone();
+        for (k, &a) in silhouette.iter().enumerate() {
+            let b = silhouette[(k + 1) % silhouette.len()];
+            let Some(&neighbour) = edge_faces.get(&(b, a)) else {
+                return self.hull_by_clipping(p, eps);
+            };
+            let neighbour_plane = kept[neighbour].plane;
+            let plane = if kept_dist[neighbour] > 0.0 {
+                neighbour_plane
+            } else {
+                self.cone_plane(a, b, p, eps).unwrap_or(neighbour_plane)
+            };
+            faces.push(Face { plane, indices: vec![a, b, apex] });
+        }
+        Self::from_parts(vertices, faces)
+    }
+
+    /// The half-spaces of the unbounded body `{x + t * dir : x ∈ self, t >= 0}`
+    /// (the polyhedron swept to infinity along `dir`). Clip a box by them to
+    /// get a bounded body.
+    ///
+    /// These are the planes of the faces with `normal · dir <= 0`, plus, for
+    /// each silhouette edge between such a face and one facing along `dir`,
+    /// the plane containing the edge and `dir`, oriented outwards.
+    ///
+    /// Every plane returned has all vertices of `self` inside it to within
+    /// `eps` and is parallel to `dir` or faces against it, so the half-spaces
+    /// always contain the swept body; for non-degenerate input they describe
+    /// it exactly. A zero `dir` gives the face planes; an empty `self` or a
+    /// non-finite `dir` gives an empty list (see
+    /// [`hull_with_point_planes`](Self::hull_with_point_planes)).
+    ///
+    /// # Algorithm
+    ///
+    /// Faces are split by the exact sign of `normal · dir`, not with a
+    /// tolerance: a face kept although `dir` leaves it would cut the sweep
+    /// off at a distance that grows without bound as the face nears
+    /// parallel, while a nearly parallel face swept although it faces
+    /// against `dir` only yields silhouette planes that nearly coincide with
+    /// it. The silhouette plane through edge `(a, b)` of a face facing along
+    /// `dir` has normal `(b - a) × dir`, evaluated with fused multiply-adds.
+    #[must_use]
+    pub fn extrusion_planes(&self, dir: DVec3, eps: f64) -> Vec<Plane> {
+        if self.is_empty() {
+            return Vec::new();
+        }
+        // Scaling by the largest component first avoids overflow for huge `dir`.
+        let Some(dir) = (dir / dir.abs().max_element()).try_normalize() else {
+            return if dir == DVec3::ZERO { self.planes().collect() } else { Vec::new() };
+        };
+        let swept: Vec<bool> = self.planes().map(|plane| plane.normal.dot(dir) > 0.0).collect();
+        let mut planes: Vec<Plane> = self.planes().zip(&swept).filter(|&(_, &s)| !s).map(|(plane, _)| plane).collect();
+        for (a, b, _) in self.silhouette(&swept) {
+            let (va, vb) = (self.vertices[a], self.vertices[b]);
+            planes.extend(self.supporting_plane(accurate_cross(vb - va, dir), va, eps));
+        }
+        planes
+    }
+
+    /// Assembles a polyhedron from faces over a vertex list, dropping unused
+    /// vertices; empty when fewer than four faces remain (no volume).
+    fn from_parts(vertices: Vec<DVec3>, mut faces: Vec<Face>) -> Self {
+        if faces.len() < 4 {
+            return Self::empty();
+        }
+        let mut new_index = vec![usize::MAX; vertices.len()];
+        for &i in faces.iter().flat_map(|f| &f.indices) {
+            new_index[i] = 0;
+        }
+        let mut used = Vec::with_capacity(vertices.len());
+        for (i, v) in vertices.into_iter().enumerate() {
+            if new_index[i] != usize::MAX {
+                new_index[i] = used.len();
+                used.push(v);
+            }
+        }
+        for i in faces.iter_mut().flat_map(|f| &mut f.indices) {
+            *i = new_index[*i];
+        }
+        Self { vertices: used, faces }
+    }
+
+    /// The directed edges `(a, b)` of faces marked in `removed` whose
+    /// reverse `(b, a)` belongs to a face not marked, with that face's index.
+    fn silhouette(&self, removed: &[bool]) -> Vec<(usize, usize, usize)> {
+        let edge_faces = half_edge_faces(&self.faces);
+        let mut edges = Vec::new();
+        for (face, _) in self.faces.iter().zip(removed).filter(|&(_, &r)| r) {
+            for (a, b) in face.edges() {
+                match edge_faces.get(&(b, a)) {
+                    Some(&neighbour) if !removed[neighbour] => edges.push((a, b, neighbour)),
+                    _ => {}
+                }
+            }
+        }
+        edges
+    }
+
+    /// The plane through vertices `a`, `b` and the point `p`, with `a, b, p`
+    /// counter-clockwise from outside; see
+    /// [`supporting_plane`](Self::supporting_plane).
+    fn cone_plane(&self, a: usize, b: usize, p: DVec3, eps: f64) -> Option<Plane> {
+        let (va, vb) = (self.vertices[a], self.vertices[b]);
+        self.supporting_plane(accurate_cross(vb - va, p - va), va, eps)
+    }
+
+    /// The plane through `anchor` with outward normal along `normal`, moved
+    /// outwards when needed so that every vertex is at most `eps` outside it.
+    /// `None` for a zero or non-finite `normal`.
+    fn supporting_plane(&self, normal: DVec3, anchor: DVec3, eps: f64) -> Option<Plane> {
+        let normal = normal.try_normalize()?;
+        let mut plane = Plane { normal, offset: -normal.dot(anchor) };
+        let excess = self.vertices.iter().map(|&v| plane.signed_distance(v)).fold(0.0, f64::max);
+        if excess > eps {
+            plane.offset -= excess;
+        }
+        Some(plane)
+    }
+
+    /// [`hull_with_point`](Self::hull_with_point) by clipping a box around
+    /// `self` and `p` with the hull's planes.
+    fn hull_by_clipping(&self, p: DVec3, eps: f64) -> Self {
+        let Some((min, max)) = self.aabb() else {
+            return Self::empty();
+        };
+        let (min, max) = (min.min(p), max.max(p));
+        let margin = DVec3::splat(0.01 * (max - min).length() + eps);
+        Self::from_aabb(min - margin, max + margin).clip_all(&self.hull_with_point_planes(p, eps), eps)
+    }
+}
+
+/// The valid box `[min, max]` with flat axes padded (see
+/// [`ConvexPolyhedron::from_aabb`]); `None` when inverted or not finite.
+fn padded_box(min: DVec3, max: DVec3) -> Option<(DVec3, DVec3)> {
+    if !(min.is_finite() && max.is_finite()) || min.cmpgt(max).any() {
+        return None;
+    }
+    let magnitude = min.abs().max(max.abs()).max_element();
+    let pad = 1e-9 * (max - min).length() + 1e-12 + 64.0 * f64::EPSILON * magnitude;
+    let (mut min, mut max) = (min, max);
+    for axis in 0..3 {
+        if max[axis] - min[axis] < pad {
+            let mid = 0.5 * (min[axis] + max[axis]);
+            min[axis] = mid - 0.5 * pad;
+            max[axis] = mid + 0.5 * pad;
+        }
+    }
+    Some((min, max))
+}
+
+/// The planes of the box `[min, max]`, in [`BOX_FACES`] order.
+fn box_planes(min: DVec3, max: DVec3) -> [Plane; 6] {
+    let plane = |normal: DVec3, offset: f64| Plane { normal, offset };
+    [
+        plane(DVec3::NEG_X, min.x),
+        plane(DVec3::X, -max.x),
+        plane(DVec3::NEG_Y, min.y),
+        plane(DVec3::Y, -max.y),
+        plane(DVec3::NEG_Z, min.z),
+        plane(DVec3::Z, -max.z),
+    ]
+}
+
+/// Maps each directed edge of the faces to the index of its face.
+fn half_edge_faces(faces: &[Face]) -> HashMap<(usize, usize), usize> {
+    let mut map = HashMap::with_capacity(faces.iter().map(|f| f.indices.len()).sum());
+    for (i, face) in faces.iter().enumerate() {
+        map.extend(face.edges().map(|edge| (edge, i)));
+    }
+    map
+}
+
+/// The hole in the surface formed by `faces` (see [`Rim`]); `edge_faces` is
+/// their [`half_edge_faces`].
+///
+/// # Algorithm
+///
+/// A boundary edge is a directed edge `(a, b)` whose reverse is in no face; a
+/// face filling the hole runs it as `b → a`. Following these reversed edges
+/// from the first one found must visit every boundary edge exactly once.
+fn rim(faces: &[Face], edge_faces: &HashMap<(usize, usize), usize>) -> Rim {
+    let mut next: HashMap<usize, usize> = HashMap::new();
+    let mut boundary = Vec::new();
+    let mut branching = false;
+    for (a, b) in faces.iter().flat_map(Face::edges) {
+        if !edge_faces.contains_key(&(b, a)) {
+            branching |= next.insert(b, a).is_some();
+            boundary.extend([b, a]);
+        }
+    }
+    let Some(&start) = boundary.first() else {
+        return Rim::Closed;
+    };
+    if !branching {
+        let mut hole = vec![start];
+        let mut v = start;
+        while let Some(&w) = next.get(&v) {
+            if w == start {
+                if hole.len() == next.len() {
+                    return Rim::Loop(hole);
+                }
+                break;
+            }
+            if hole.len() == next.len() {
+                break;
+            }
+            hole.push(w);
+            v = w;
+        }
+    }
+    let mut seen = HashSet::new();
+    boundary.retain(|&v| seen.insert(v));
+    Rim::Tangled(boundary)
+}
+
+/// `indices` sorted by angle around their centroid, counter-clockwise seen
+/// from where `normal` points.
+fn sort_around(vertices: &[DVec3], indices: Vec<usize>, normal: DVec3) -> Vec<usize> {
+    if indices.is_empty() {
+        return indices;
+    }
+    let center = indices.iter().map(|&i| vertices[i]).sum::<DVec3>() / indices.len() as f64;
+    let u = normal.any_orthonormal_vector();
+    let w = normal.cross(u);
+    let mut keyed: Vec<(f64, usize)> = indices
+        .into_iter()
+        .map(|i| {
+            let d = vertices[i] - center;
+            (d.dot(w).atan2(d.dot(u)), i)
+        })
+        .collect();
+    keyed.sort_by(|x, y| x.0.total_cmp(&y.0));
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const EPS: f64 = 1e-9;
+
+    fn unit_cube() -> ConvexPolyhedron {
+        ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::ONE)
+    }
+
+    /// Closedness, orientation and planarity checks shared by the tests.
+    fn assert_valid(body: &ConvexPolyhedron) {
+        if body.is_empty() {
+            assert!(body.vertices().is_empty());
+            return;
+        }
+        let edges = half_edge_faces(body.faces());
+        let mut used = vec![false; body.vertices().len()];
+        let mut directed = 0;
+        for face in body.faces() {
+            assert!(face.indices().len() >= 3);
+            for (a, b) in face.edges() {
+                directed += 1;
+                assert!(edges.contains_key(&(b, a)), "edge {a}-{b} has no twin");
+                used[a] = true;
+            }
+            for &i in face.indices() {
+                let d = face.plane().signed_distance(body.vertices()[i]);
+                assert!(d.abs() < 1e-9 * body.scale().max(1.0), "vertex off its face by {d}");
+            }
+        }
+        assert_eq!(directed, edges.len(), "repeated directed edge");
+        assert!(used.iter().all(|&u| u), "unused vertex");
+        let (v, e, f) = (body.vertices().len() as i64, directed as i64 / 2, body.faces().len() as i64);
+        assert_eq!(v - e + f, 2, "Euler characteristic");
+        let c = body.centroid();
+        assert!(body.contains(c, 0.0));
+        assert!(body.volume() > 0.0);
+    }
+
+    #[test]
+    fn cube_basics() {
+        let cube = unit_cube();
+        assert_valid(&cube);
+        assert_eq!(cube.vertices().len(), 8);
+        assert_eq!(cube.faces().len(), 6);
+        assert!((cube.volume() - 1.0).abs() < 1e-15);
+        assert_eq!(cube.centroid(), DVec3::splat(0.5));
+        assert!((cube.scale() - 3f64.sqrt()).abs() < 1e-15);
+        assert_eq!(cube.aabb(), Some((DVec3::ZERO, DVec3::ONE)));
+        assert!(cube.contains(DVec3::ONE, 0.0));
+        assert!(!cube.contains(DVec3::new(1.1, 0.5, 0.5), EPS));
+        assert!(!cube.contains(DVec3::NAN, EPS));
+        assert!((cube.default_eps() - 1e-9 * 3f64.sqrt()).abs() < 1e-20);
+    }
+
+    #[test]
+    fn empty_body() {
+        let e = ConvexPolyhedron::empty();
+        assert!(e.is_empty());
+        assert_eq!(e.volume(), 0.0);
+        assert_eq!(e.scale(), 0.0);
+        assert_eq!(e.aabb(), None);
+        assert!(!e.contains(DVec3::ZERO, 1.0));
+        assert!(e.clip(&Plane::from_point_normal(DVec3::ZERO, DVec3::X), EPS).is_empty());
+        assert!(e.hull_with_point(DVec3::ZERO, EPS).is_empty());
+        assert!(e.hull_with_point_planes(DVec3::ZERO, EPS).is_empty());
+        assert!(e.extrusion_planes(DVec3::X, EPS).is_empty());
+    }
+
+    #[test]
+    fn flat_and_invalid_boxes() {
+        let flat = ConvexPolyhedron::from_aabb(DVec3::new(0.0, 2.0, 0.0), DVec3::new(4.0, 2.0, 3.0));
+        assert_valid(&flat);
+        let (min, max) = flat.aabb().unwrap();
+        let thickness = max.y - min.y;
+        assert!(thickness > 0.0 && thickness < 1e-8, "{thickness}");
+        assert!(min.y < 2.0 && max.y > 2.0);
+
+        let point = ConvexPolyhedron::from_aabb(DVec3::splat(1e5), DVec3::splat(1e5));
+        assert_valid(&point);
+        assert!(point.contains(DVec3::splat(1e5), 0.0));
+
+        assert!(ConvexPolyhedron::from_aabb(DVec3::ONE, DVec3::ZERO).is_empty());
+        assert!(ConvexPolyhedron::from_aabb(DVec3::new(0.0, 0.0, 1.0), DVec3::new(1.0, 1.0, 0.0)).is_empty());
+        assert!(ConvexPolyhedron::from_aabb(DVec3::NAN, DVec3::ONE).is_empty());
+        assert!(ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::INFINITY).is_empty());
+    }
+
+    #[test]
+    fn clip_in_half() {
+        let half = unit_cube().clip(&Plane::from_point_normal(DVec3::splat(0.5), DVec3::X), EPS);
+        assert_valid(&half);
+        assert_eq!((half.vertices().len(), half.faces().len()), (8, 6));
+        assert!((half.volume() - 0.5).abs() < 1e-15);
+        assert_eq!(half.aabb(), Some((DVec3::ZERO, DVec3::new(0.5, 1.0, 1.0))));
+    }
+
+    #[test]
+    fn clip_corner() {
+        let plane = Plane::from_point_normal(DVec3::new(1.0, 1.0, 0.75), DVec3::ONE);
+        let body = unit_cube().clip(&plane, EPS);
+        assert_valid(&body);
+        assert_eq!((body.vertices().len(), body.faces().len()), (10, 7));
+        // Cut-off corner: tetrahedron with legs 0.25.
+        assert!((body.volume() - (1.0 - 0.25f64.powi(3) / 6.0)).abs() < 1e-14);
+        let cap = body.faces().last().unwrap();
+        assert_eq!(cap.plane(), plane);
+        assert_eq!(cap.indices().len(), 3);
+    }
+
+    #[test]
+    fn clip_through_vertices() {
+        // Through four vertices: the cut runs along existing edges.
+        let plane = Plane::from_point_normal(DVec3::ZERO, DVec3::new(1.0, 0.0, -1.0));
+        let prism = unit_cube().clip(&plane, EPS);
+        assert_valid(&prism);
+        assert_eq!((prism.vertices().len(), prism.faces().len()), (6, 5));
+        assert!((prism.volume() - 0.5).abs() < 1e-15);
+
+        // Touching a single vertex from outside: unchanged.
+        let touching = Plane::from_point_normal(DVec3::ONE, DVec3::ONE);
+        assert_eq!(unit_cube().clip(&touching, EPS), unit_cube());
+        // Touching from inside: only a vertex would remain.
+        assert!(unit_cube().clip(&touching.flipped(), EPS).is_empty());
+        // A face on the plane, the rest outside: nothing with volume remains.
+        let face_plane = Plane::from_point_normal(DVec3::ZERO, DVec3::X);
+        assert!(unit_cube().clip(&face_plane, EPS).is_empty());
+        assert_eq!(unit_cube().clip(&face_plane.flipped(), EPS), unit_cube());
+        // Within eps of a face: counts as on it.
+        let near = Plane::from_point_normal(DVec3::new(1.0 - 1e-12, 0.0, 0.0), DVec3::X);
+        assert_eq!(unit_cube().clip(&near, EPS), unit_cube());
+    }
+
+    #[test]
+    fn clip_by_bad_planes() {
+        let nan = Plane { normal: DVec3::NAN, offset: 0.0 };
+        assert!(unit_cube().clip(&nan, EPS).is_empty());
+        let zero = Plane::from_point_normal(DVec3::ZERO, DVec3::ZERO);
+        assert!(unit_cube().clip(&zero, EPS).is_empty());
+        // NaN eps counts as zero.
+        let half = unit_cube().clip(&Plane::from_point_normal(DVec3::splat(0.5), DVec3::Y), f64::NAN);
+        assert!((half.volume() - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn clip_all_and_intersect_aabb() {
+        let planes: Vec<Plane> = [DVec3::X, DVec3::Y, DVec3::Z]
+            .iter()
+            .map(|&n| Plane::from_point_normal(DVec3::splat(0.5), n))
+            .collect();
+        let small = unit_cube().clip_all(&planes, EPS);
+        assert!((small.volume() - 0.125).abs() < 1e-15);
+        let boxed = unit_cube().intersect_aabb(DVec3::splat(0.25), DVec3::splat(2.0), EPS);
+        assert!((boxed.volume() - 0.75f64.powi(3)).abs() < 1e-14);
+        assert!(unit_cube().intersect_aabb(DVec3::splat(2.0), DVec3::splat(3.0), EPS).is_empty());
+        assert!(unit_cube().intersect_aabb(DVec3::ONE, DVec3::ZERO, EPS).is_empty());
+    }
+
+    fn frustum_corners(mirror: bool) -> [DVec3; 8] {
+        let (near, far, t) = (0.5, 4.0, 0.75);
+        std::array::from_fn(|i| {
+            let x = if i & 1 == 0 { -1.0 } else { 1.0 };
+            let y = if i & 2 == 0 { -1.0 } else { 1.0 };
+            let z = if i & 4 == 0 { near } else { far };
+            let p = DVec3::new(x * t * z, y * t * z, -z);
+            if mirror {
+                p * DVec3::new(-1.0, 1.0, 1.0)
+            } else {
+                p
+            }
+        })
+    }
+
+    #[test]
+    fn frustum_either_handedness() {
+        let (near, far, t) = (0.5f64, 4.0f64, 0.75f64);
+        let expected = 4.0 * t * t * (far.powi(3) - near.powi(3)) / 3.0;
+        for mirror in [false, true] {
+            let f = ConvexPolyhedron::from_frustum_corners(&frustum_corners(mirror)).unwrap();
+            assert_valid(&f);
+            assert!((f.volume() - expected).abs() < 1e-12 * expected);
+            assert!(f.contains(DVec3::new(0.0, 0.0, -1.0), 0.0));
+            assert!(!f.contains(DVec3::new(0.0, 0.0, -0.4), EPS));
+        }
+    }
+
+    #[test]
+    fn degenerate_frusta() {
+        let mut c = frustum_corners(false);
+        c[3] = DVec3::NAN;
+        assert!(ConvexPolyhedron::from_frustum_corners(&c).is_none());
+        // Near face collapsed to a point.
+        let mut c = frustum_corners(false);
+        for corner in &mut c[..4] {
+            *corner = DVec3::ZERO;
+        }
+        assert!(ConvexPolyhedron::from_frustum_corners(&c).is_none());
+        // Twisted: two far corners swapped.
+        let mut c = frustum_corners(false);
+        c.swap(4, 5);
+        assert!(ConvexPolyhedron::from_frustum_corners(&c).is_none());
+        // Flat.
+        let c: [DVec3; 8] = std::array::from_fn(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, 0.0));
+        assert!(ConvexPolyhedron::from_frustum_corners(&c).is_none());
+    }
+
+    #[test]
+    fn hull_with_point_above_face() {
+        let cube = unit_cube();
+        let p = DVec3::new(0.5, 0.5, 3.0);
+        let hull = cube.hull_with_point(p, EPS);
+        assert_valid(&hull);
+        assert_eq!((hull.vertices().len(), hull.faces().len()), (9, 9));
+        assert!((hull.volume() - (1.0 + 2.0 / 3.0)).abs() < 1e-14);
+        let planes = cube.hull_with_point_planes(p, EPS);
+        assert_eq!(planes.len(), 9);
+        let mut from_planes: Vec<Plane> = hull.planes().collect();
+        let key = |a: &Plane, b: &Plane| a.to_homogeneous().to_array().partial_cmp(&b.to_homogeneous().to_array()).unwrap();
+        from_planes.sort_by(key);
+        let mut sorted = planes.clone();
+        sorted.sort_by(key);
+        assert_eq!(from_planes, sorted);
+        for plane in &planes {
+            assert!(plane.signed_distance(p).abs() < 1e-15 || plane.signed_distance(p) < 0.0);
+        }
+    }
+
+    #[test]
+    fn hull_with_point_inside_or_on() {
+        let cube = unit_cube();
+        for p in [DVec3::splat(0.5), DVec3::ONE, DVec3::new(1.0 + 1e-12, 0.5, 0.5)] {
+            assert_eq!(cube.hull_with_point(p, EPS), cube);
+            assert_eq!(cube.hull_with_point_planes(p, EPS), cube.planes().collect::<Vec<_>>());
+        }
+        assert!(cube.hull_with_point(DVec3::NAN, EPS).is_empty());
+        assert!(cube.hull_with_point_planes(DVec3::INFINITY, EPS).is_empty());
+    }
+
+    #[test]
+    fn hull_with_point_beyond_corner() {
+        let hull = unit_cube().hull_with_point(DVec3::splat(2.0), EPS);
+        assert_valid(&hull);
+        // Three faces see p; their three far vertices... only (1,1,1) is lost.
+        assert_eq!(hull.vertices().len(), 8);
+        assert!(!hull.vertices().contains(&DVec3::ONE));
+        // 3 kept faces + 6 triangles to the 6-edge silhouette.
+        assert_eq!(hull.faces().len(), 9);
+        assert!((hull.volume() - (1.0 + 3.0 * (1.0 / 3.0))).abs() < 1e-14);
+    }
+
+    #[test]
+    fn hull_with_point_grazing_an_edge() {
+        // p sees the top face (by more than eps) and the right face by less
+        // than eps: the plane through their common edge and p would cut the
+        // cube, so the right face's own plane bounds the hull there.
+        let cube = unit_cube();
+        let p = DVec3::new(1.0 + 0.5 * EPS, 0.5, 1.0 + 2.0 * EPS);
+        let planes = cube.hull_with_point_planes(p, EPS);
+        for plane in &planes {
+            for &v in cube.vertices() {
+                assert!(plane.signed_distance(v) <= EPS, "{plane:?} cuts {v}");
+            }
+            assert!(plane.signed_distance(p) <= EPS);
+        }
+        let hull = cube.hull_with_point(p, EPS);
+        assert_valid(&hull);
+        assert!((hull.volume() - 1.0).abs() < 1e-8);
+    }
+
+    #[test]
+    fn extrude_cube() {
+        let cube = unit_cube();
+        let planes = cube.extrusion_planes(DVec3::new(0.0, 0.0, -2.0), EPS);
+        assert_eq!(planes.len(), 9);
+        let swept = ConvexPolyhedron::from_aabb(DVec3::splat(-10.0), DVec3::splat(10.0)).clip_all(&planes, EPS);
+        assert_valid(&swept);
+        assert_eq!(swept.aabb(), Some((DVec3::new(0.0, 0.0, -10.0), DVec3::ONE)));
+
+        // Diagonal sweep: a slanted prism.
+        let dir = DVec3::new(1.0, 1.0, 1.0);
+        let planes = cube.extrusion_planes(dir, EPS);
+        let swept = ConvexPolyhedron::from_aabb(DVec3::splat(-10.0), DVec3::splat(10.0)).clip_all(&planes, EPS);
+        assert_valid(&swept);
+        assert!(swept.contains(DVec3::splat(9.5), EPS));
+        assert!(swept.contains(DVec3::ZERO, EPS));
+        assert!(!swept.contains(DVec3::new(5.0, 0.0, 0.0), EPS));
+        assert!(!swept.contains(DVec3::splat(-0.1), EPS));
+
+        assert_eq!(cube.extrusion_planes(DVec3::ZERO, EPS), cube.planes().collect::<Vec<_>>());
+        assert!(cube.extrusion_planes(DVec3::NAN, EPS).is_empty());
+        assert_eq!(cube.extrusion_planes(DVec3::new(0.0, 1e300, 0.0), EPS).len(), 9);
+    }
+
+    #[test]
+    fn rim_fallback_sorts_counter_clockwise() {
+        let vertices = [
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, -1.0, 0.0),
+        ];
+        let sorted = sort_around(&vertices, vec![0, 1, 2, 3], DVec3::Z);
+        let start = sorted.iter().position(|&i| i == 0).unwrap();
+        let rotated: Vec<usize> = (0..4).map(|k| sorted[(start + k) % 4]).collect();
+        assert_eq!(rotated, vec![0, 2, 1, 3]);
+    }
+
+    #[test]
+    fn repeated_clipping_stays_closed() {
+        // Many planes through nearly the same line: near-degenerate cuts.
+        let mut body = unit_cube();
+        for k in 0..50 {
+            let angle = 0.3 + 1e-7 * k as f64;
+            let n = DVec3::new(angle.cos(), angle.sin(), 1e-3 * k as f64);
+            body = body.clip(&Plane::from_point_normal(DVec3::splat(0.5), n), EPS);
+            assert_valid(&body);
+        }
+    }
+}

@@ -1,0 +1,60 @@
+//! # lixel — a lixel for every pixel
+//!
+//! Shadow maps alias because a light's texels land unevenly on screen. A
+//! shadow map's 4x4 light matrix has free parameters that decide where its
+//! texels go; lixel computes them.
+//!
+//! Every light matrix is a planar homography `G = [g1; g2; j]` of the light
+//! coordinates `X~` ([`LightFrame`]) plus a depth row: the optical axis `j`
+//! is the projective freedom, `g1, g2` (given `j`) the affine one. The
+//! methods differ only in how they choose `j` and the region the map must
+//! hold; one shared affine fit ([`fit`]: minimum-area rectangle) and one depth
+//! policy ([`DepthRange`]) finish every matrix, and one scorer ([`score`])
+//! measures them all.
+//!
+//! ## Methods
+//!
+//! | [`Parameterization`] | what it computes | reference |
+//! |---|---|---|
+//! | `Normal` | uniform map around every receiver the light reaches | — |
+//! | `Focused` | uniform map around the receivers the view frustum sees | Brabec et al. 2002 |
+//! | `Psm` | uniform in the camera's post-perspective space, with hull `H = conv(V ∪ l) ∩ S ∩ L` and virtual camera shift | Stamminger & Drettakis 2002 |
+//! | `LiSpsm` | perspective frustum in light space along the projected view direction, simple or general `n_opt` | Wimmer, Scherzer & Purgathofer 2004 |
+//! | `PlaneOptimal` | exactly uniform sampling on one receiver plane | Chong & Gortler 2004 |
+//!
+//! Start with [`ShadowProblem`].
+//!
+//! ## Conventions
+//! wgpu's: right-handed world, clip depth in `[0, 1]`, NDC `y` up, framebuffer
+//! row 0 at the top. All solver arithmetic is in `f64`;
+//! [`LightMatrix::clip_from_world_f32`] converts for upload.
+//!
+//! ## Features
+//! `render` (default) adds the wgpu renderer; without it the crate is the
+//! solver alone (glam, thiserror, robust).
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod camera;
+mod error;
+pub mod fit;
+pub mod geometry;
+mod light;
+mod matrix;
+mod methods;
+mod problem;
+mod scene;
+pub mod score;
+mod tolerance;
+
+pub use camera::Camera;
+pub use error::{LixelError, Result};
+pub use light::{Light, LightFrame};
+pub use matrix::{DepthRange, Fallback, LightMatrix, Method};
+pub use methods::{
+    psm_light_case, LiSpsmOptions, NOpt, Parameterization, PlaneOptimalOptions, PsmLightCase, PsmOptions,
+};
+pub use problem::ShadowProblem;
+pub use scene::{Aabb, SceneBounds, ShadowMapSize};
+pub use tolerance::Tolerances;

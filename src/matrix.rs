@@ -1,0 +1,303 @@
+//! The result type, [`LightMatrix`], and the one place where an optical axis
+//! `j` plus the points a map must hold become a 4x4 matrix.
+
+use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Mat4};
+
+use crate::camera::viewport_matrix;
+use crate::error::{LixelError, Result};
+use crate::fit::{AffineFitOptions, FitWorkspace};
+use crate::light::LightFrame;
+use crate::scene::ShadowMapSize;
+use crate::tolerance::Tolerances;
+
+/// Which parameterization produced a matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Method {
+    /// Uniform map around all receivers ("normal" in the papers).
+    Normal,
+    /// Uniform map limited to what the view frustum can see.
+    Focused,
+    /// Perspective shadow maps (Stamminger & Drettakis 2002).
+    Psm,
+    /// Light-space perspective shadow maps (Wimmer et al. 2004).
+    LiSpsm,
+    /// Perfect sampling on one receiver plane (Chong & Gortler 2004).
+    PlaneOptimal,
+    /// Optimized from read-back samples (Chong & Gortler 2006).
+    SceneOptimized,
+}
+
+impl Method {
+    /// Short lowercase name, as used in reports and on the command line.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Normal => "normal",
+            Self::Focused => "focused",
+            Self::Psm => "psm",
+            Self::LiSpsm => "lispsm",
+            Self::PlaneOptimal => "plane-optimal",
+            Self::SceneOptimized => "scene-optimized",
+        }
+    }
+}
+
+/// Why a method returned something other than its own ideal matrix. The
+/// matrix is still correct: every relevant point is in the map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Fallback {
+    /// The view frustum sees no receiver; the map covers all receivers
+    /// (a normal map) so that it is still usable.
+    NothingVisible,
+    /// LiSPSM: the light is (anti-)parallel to the view direction
+    /// (`sin γ` below [`Tolerances::lispsm_min_sin_gamma`]); a uniform
+    /// (focused) map was used, as the method prescribes in the limit.
+    LightAlongView {
+        /// `sin γ` of the configuration.
+        sin_gamma: f64,
+    },
+    /// PSM: the light lies inside the hull `H` (so `H` spans more than a
+    /// half-space seen from the light), or post-perspective space degenerated;
+    /// the focused axis was used.
+    PsmHullAroundLight,
+    /// Plane-optimal: some relevant points lie at or beyond the vanishing line
+    /// of the plane-optimal homography. The optical axis was blended towards
+    /// the focused axis by the smallest amount `blend` in `(0, 1]` that brings
+    /// all of them in front (`blend = 1` is the focused map).
+    PlaneOptimalBlended {
+        /// Weight of the focused axis in the blend.
+        blend: f64,
+    },
+    /// Plane-optimal: the eye or the light lies in the receiver plane, so the
+    /// plane's homography is singular; the focused map was used.
+    PlaneDegenerate,
+    /// Scene-optimized: no usable samples; the focused map was used.
+    NoUsableSamples,
+}
+
+/// How depth is stored, with the range it covers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DepthRange {
+    /// Point and spot lights: `z_ndc = a + b / (j·X~)` with `z = 0` at
+    /// `j·X~ = near` and `1` at `far` (distances along the optical axis).
+    Perspective {
+        /// Near distance along `j`.
+        near: f64,
+        /// Far distance along `j`.
+        far: f64,
+    },
+    /// Directional lights: `z_ndc = α (c - c_min) / w` with `c = d·x` the
+    /// distance along the light direction and `w = j·X~`; monotone along
+    /// every light ray and in `[0, 1]` over the covered region.
+    Orthographic {
+        /// Smallest `c` of any point needing depth.
+        c_min: f64,
+        /// Largest `c`.
+        c_max: f64,
+        /// `α = w_min / (c_max - c_min)`.
+        alpha: f64,
+    },
+}
+
+/// A shadow map's light matrix and how it was made.
+///
+/// `clip_from_world` is in wgpu conventions (depth `[0, 1]`, NDC y up). Its
+/// rows 1, 2 and 4, restricted to the light coordinates `X~` of
+/// [`LightFrame::homogeneous`], form the homography `G = [g1; g2; j]` (NDC
+/// units, `|j| = 1`); row 3 is the depth row of [`DepthRange`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightMatrix {
+    /// World to light clip space.
+    pub clip_from_world: DMat4,
+    /// The light frame the homography acts in.
+    pub frame: LightFrame,
+    /// `G`: rows `g1`, `g2` (NDC x and y), `j` (the optical axis, unit length).
+    pub homography: DMat3,
+    /// The depth row's parameters.
+    pub depth: DepthRange,
+    /// The shadow map's size in texels.
+    pub map_size: ShadowMapSize,
+    /// Render and compare with a reversed depth test (greater-is-closer).
+    /// lixel's own builders always normalise depth so that it grows away from
+    /// the light, so this is `false` for every built-in method (PSM's
+    /// "inverted" light included: see the crate docs).
+    pub reverse_depth_test: bool,
+    /// Casters closer to the light than the near plane exist: render with
+    /// unclipped depth (`wgpu::Features::DEPTH_CLIP_CONTROL`,
+    /// `unclipped_depth: true`) so that they rasterize, clamped to depth 0.
+    pub needs_unclipped_depth: bool,
+    /// The method that produced the matrix.
+    pub method: Method,
+    /// Set when the method could not use its own ideal parameters.
+    pub fallback: Option<Fallback>,
+}
+
+impl LightMatrix {
+    /// The optical axis `j` in light coordinates (unit length).
+    #[must_use]
+    pub fn optical_axis(&self) -> DVec3 {
+        self.homography.row(2)
+    }
+
+    /// `clip_from_world` in single precision, for uploading to a GPU.
+    #[must_use]
+    pub fn clip_from_world_f32(&self) -> Mat4 {
+        self.clip_from_world.as_mat4()
+    }
+
+    /// Texel coordinates (x right, y down, as stored in the texture; texel
+    /// centres at half-integers) plus depth, from world space, homogeneous.
+    #[must_use]
+    pub fn texel_from_world(&self) -> DMat4 {
+        viewport_matrix(f64::from(self.map_size.width), f64::from(self.map_size.height)) * self.clip_from_world
+    }
+
+    /// NDC position `(x, y, depth)` of a world point, or `None` when it lies
+    /// on or behind the light's vanishing plane (`w <= 0`).
+    #[must_use]
+    pub fn project(&self, world: DVec3) -> Option<DVec3> {
+        let clip = self.clip_from_world * world.extend(1.0);
+        (clip.w > 0.0).then(|| clip.truncate() / clip.w)
+    }
+
+    /// Whether a world point lands inside the map (`|x|, |y| <= 1 + slack`,
+    /// in front of the light).
+    #[must_use]
+    pub fn covers(&self, world: DVec3, slack: f64) -> bool {
+        self.project(world)
+            .is_some_and(|ndc| ndc.x.abs() <= 1.0 + slack && ndc.y.abs() <= 1.0 + slack)
+    }
+}
+
+/// Points `X~` in front of the light for axis `j`, projected onto the plane
+/// `j·v = 1` and expressed in an orthonormal basis `(e1, e2)` of `j⊥`.
+///
+/// Returns the basis. Points with `j·X~ <= 0` are reported through `Err`.
+pub(crate) fn project_to_image_plane(
+    j: DVec3,
+    points: impl IntoIterator<Item = DVec3>,
+    out: &mut Vec<DVec2>,
+) -> std::result::Result<(DVec3, DVec3), usize> {
+    let (e1, e2) = j.any_orthonormal_pair();
+    out.clear();
+    for (i, x) in points.into_iter().enumerate() {
+        let w = j.dot(x);
+        if !(w > 0.0) {
+            return Err(i);
+        }
+        out.push(DVec2::new(e1.dot(x), e2.dot(x)) / w);
+    }
+    Ok((e1, e2))
+}
+
+/// Everything needed to turn an optical axis into a [`LightMatrix`].
+pub(crate) struct Placement<'a> {
+    pub frame: LightFrame,
+    /// Optical axis, any positive scale.
+    pub axis: DVec3,
+    /// World points that must land inside the map.
+    pub focus: &'a [DVec3],
+    /// Further world points that must lie inside the depth range (casters).
+    pub depth_points: &'a [DVec3],
+    pub map: ShadowMapSize,
+    pub fit: &'a AffineFitOptions,
+    pub tolerances: &'a Tolerances,
+    pub method: Method,
+    pub fallback: Option<Fallback>,
+}
+
+impl Placement<'_> {
+    /// Fits the affine part around `focus` for the axis and adds the depth row.
+    ///
+    /// # Errors
+    /// [`LixelError::NotInFront`] when a focus point is not safely in front of
+    /// the light for this axis; [`LixelError::UnusableSamples`] when there
+    /// are no focus points.
+    pub(crate) fn build(&self, workspace: &mut FitWorkspace) -> Result<LightMatrix> {
+        let j = self.axis.normalize();
+        if !j.is_finite() {
+            return Err(LixelError::NotInFront { method: self.method });
+        }
+        let xs: Vec<DVec3> = self.focus.iter().map(|&p| self.frame.homogeneous(p)).collect();
+        if xs.is_empty() {
+            return Err(LixelError::UnusableSamples { reason: "no points to fit the map around" });
+        }
+        // Every focus point must be safely in front of the light.
+        let max_w = xs.iter().map(|x| j.dot(*x)).fold(0.0, f64::max);
+        let cos_min = self.tolerances.min_front_cosine;
+        let safely_in_front = |x: &DVec3| {
+            let w = j.dot(*x);
+            if self.frame.is_orthographic() {
+                w > cos_min * max_w
+            } else {
+                w > cos_min * x.length()
+            }
+        };
+        if !xs.iter().all(safely_in_front) {
+            return Err(LixelError::NotInFront { method: self.method });
+        }
+        let mut plane_points = Vec::with_capacity(xs.len());
+        let (e1, e2) = project_to_image_plane(j, xs.iter().copied(), &mut plane_points)
+            .map_err(|_| LixelError::NotInFront { method: self.method })?;
+        let fit = workspace
+            .fit(&plane_points, self.map.width, self.map.height, self.fit)
+            .map_err(|_| LixelError::UnusableSamples { reason: "affine fit failed" })?;
+        let basis = DMat3::from_cols(e1, e2, j).transpose();
+        let homography = fit.ndc_from_plane * basis;
+        Ok(self.finish(homography, &xs))
+    }
+
+    /// Adds the depth row to a homography whose third row is the unit axis.
+    fn finish(&self, homography: DMat3, focus_light: &[DVec3]) -> LightMatrix {
+        let j = homography.row(2);
+        let t_rows = self.frame.light_from_world_3x4_rows();
+        let g_row = |r: usize| -> DVec4 {
+            let g = homography.row(r);
+            t_rows[0] * g.x + t_rows[1] * g.y + t_rows[2] * g.z
+        };
+        let (x_row, y_row, w_row) = (g_row(0), g_row(1), g_row(2));
+        let pad = self.tolerances.depth_pad;
+        let all_depth = self.focus.iter().chain(self.depth_points);
+        let mut needs_unclipped_depth = false;
+        let (z_row, depth) = match self.frame {
+            LightFrame::Perspective { .. } => {
+                let ts = all_depth.map(|&p| w_row.dot(p.extend(1.0)));
+                let (lo, hi) = ts.fold((f64::INFINITY, 0.0_f64), |(lo, hi), t| (lo.min(t), hi.max(t)));
+                let far = hi * (1.0 + pad);
+                let mut near = lo * (1.0 - pad);
+                if !(near >= far * self.tolerances.min_near_far_ratio) {
+                    near = far * self.tolerances.min_near_far_ratio;
+                    needs_unclipped_depth = true;
+                }
+                let a = far / (far - near);
+                let b = -near * far / (far - near);
+                (w_row * a + DVec4::W * b, DepthRange::Perspective { near, far })
+            }
+            LightFrame::Orthographic { rotation } => {
+                let d = rotation.row(2);
+                let (lo, hi) = all_depth
+                    .map(|p| d.dot(*p))
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+                let span = (hi - lo).max(f64::MIN_POSITIVE.sqrt()).max(1e-12 * lo.abs().max(hi.abs()));
+                let (c_min, c_max) = (lo - pad * span, hi + pad * span);
+                let w_min = focus_light.iter().map(|x| j.dot(*x)).fold(f64::INFINITY, f64::min);
+                let alpha = w_min / (c_max - c_min);
+                (d.extend(-c_min) * alpha, DepthRange::Orthographic { c_min, c_max, alpha })
+            }
+        };
+        let clip_from_world = DMat4::from_cols(x_row, y_row, z_row, w_row).transpose();
+        LightMatrix {
+            clip_from_world,
+            frame: self.frame,
+            homography,
+            depth,
+            map_size: self.map,
+            reverse_depth_test: false,
+            needs_unclipped_depth,
+            method: self.method,
+            fallback: self.fallback,
+        }
+    }
+}

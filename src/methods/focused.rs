@@ -1,0 +1,26 @@
+//! Focused shadow maps: the normal map limited to the receivers the view
+//! frustum can see (the papers' "frustum-limiting" step).
+//!
+//! The papers project `V` onto the light's image plane and intersect it with
+//! the projection of the scene; lixel fits the map around `V ∩ R ∩ L`, whose
+//! projection lies inside that intersection, so the map is never larger.
+
+use crate::error::Result;
+use crate::matrix::{Fallback, LightMatrix, Method};
+use crate::problem::ShadowProblem;
+
+pub(super) fn solve(problem: &ShadowProblem) -> Result<LightMatrix> {
+    solve_as(problem, Method::Focused, None)
+}
+
+/// The focused map reported as `method` with `fallback` (other methods fall
+/// back to it).
+pub(super) fn solve_as(problem: &ShadowProblem, method: Method, fallback: Option<Fallback>) -> Result<LightMatrix> {
+    let focus = problem.visible_receiver_body();
+    if focus.is_empty() {
+        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible));
+    }
+    let frame = problem.frame_towards(&focus);
+    let axis = super::uniform_axis(problem, &frame, &focus, method)?;
+    problem.place(frame, axis, &focus, method, fallback)
+}

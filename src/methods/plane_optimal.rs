@@ -1,0 +1,132 @@
+//! Plane-optimal shadow maps (Chong & Gortler 2004, "A lixel for every pixel").
+//!
+//! For a receiver plane `π` the map from a screen pixel to the plane point it
+//! shows is projective, and so is the map from that point to light
+//! coordinates. Composing the two gives `X~ = H x̂` for the homogeneous pixel
+//! `x̂ = (x₁ w, x₂ w, w)` (`w` the point's view depth). Choosing `G = A H⁻¹`
+//! with `A` affine makes the shadow-map position an affine function of the
+//! pixel on the plane: every visible pixel of the plane gets the same number
+//! of texels. The optical axis is the third row of `H⁻¹` (so `j·X~` equals
+//! the view depth of the plane point: positive in front of the camera).
+//!
+//! Relevant points off the plane may land at or beyond this map's vanishing
+//! line. Then no single map keeps both perfect sampling and full coverage:
+//! lixel blends the axis towards the focused axis by the smallest weight that
+//! keeps every relevant point at least [`PlaneOptimalOptions::min_relative_w`]
+//! of its focused `w`, and reports [`Fallback::PlaneOptimalBlended`].
+
+use glam::{DMat3, DVec3};
+
+use crate::error::{check_finite, LixelError, Result};
+use crate::geometry::Plane;
+use crate::matrix::{Fallback, LightMatrix, Method};
+use crate::problem::ShadowProblem;
+
+/// Options of [`Parameterization::PlaneOptimal`](crate::Parameterization::PlaneOptimal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneOptimalOptions {
+    /// The receiver plane. `None`: the horizontal plane at the bottom of the
+    /// receiver bounds (the floor), `y = receivers.min.y`.
+    pub plane: Option<Plane>,
+    /// Every relevant point must keep at least this fraction of the `w` it has
+    /// in the focused map (both axes unit length); below it the axis is
+    /// blended towards the focused one. In `(0, 1)`; default `0.25`.
+    pub min_relative_w: f64,
+}
+
+impl PlaneOptimalOptions {
+    /// The floor of the receiver bounds, `min_relative_w = 0.25`.
+    pub const DEFAULT: Self = Self { plane: None, min_relative_w: 0.25 };
+
+    /// Optimal on `plane`.
+    #[must_use]
+    pub fn on_plane(plane: Plane) -> Self {
+        Self { plane: Some(plane), ..Self::DEFAULT }
+    }
+}
+
+impl Default for PlaneOptimalOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> Result<LightMatrix> {
+    let plane = match options.plane {
+        Some(p) => {
+            check_finite(&[p.normal.x, p.normal.y, p.normal.z, p.offset], "receiver plane")?;
+            let len = p.normal.length();
+            if !(len > 0.0) {
+                return Err(LixelError::InvalidPlane { reason: "zero normal" });
+            }
+            Plane { normal: p.normal / len, offset: p.offset / len }
+        }
+        None => Plane::from_point_normal(problem.bounds().receivers.min, DVec3::Y),
+    };
+    if !(options.min_relative_w > 0.0 && options.min_relative_w < 1.0) {
+        return Err(LixelError::InvalidPlane { reason: "min_relative_w must lie in (0, 1)" });
+    }
+    let focus = problem.visible_receiver_body();
+    if focus.is_empty() {
+        return super::focused::solve_as(problem, Method::PlaneOptimal, None);
+    }
+    let frame = problem.frame_towards(&focus);
+    let focused_axis = super::uniform_axis(problem, &frame, &focus, Method::PlaneOptimal)?.normalize();
+    let Some(plane_axis) = plane_optimal_axis(problem, &frame, &plane) else {
+        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate));
+    };
+
+    // Smallest blend t with ((1-t) j_p + t j_f)·û ≥ β (j_f·û) for every
+    // relevant point; linear in t for each point, and t = 1 satisfies all.
+    let beta = options.min_relative_w;
+    let mut blend = 0.0_f64;
+    for &p in focus.vertices() {
+        let u = frame.homogeneous(p).normalize();
+        let (wp, wf) = (plane_axis.dot(u), focused_axis.dot(u));
+        let need = beta * wf;
+        if wp < need {
+            // wp + t (wf - wp) >= need  <=>  t >= (need - wp) / (wf - wp); wf > need > wp.
+            blend = blend.max((need - wp) / (wf - wp));
+        }
+    }
+    let blend = blend.clamp(0.0, 1.0);
+    let (axis, fallback) = if blend > 0.0 {
+        (plane_axis * (1.0 - blend) + focused_axis * blend, Some(Fallback::PlaneOptimalBlended { blend }))
+    } else {
+        (plane_axis, None)
+    };
+    problem.place(frame, axis, &focus, Method::PlaneOptimal, fallback)
+}
+
+/// The unit plane-optimal axis in light coordinates of `frame`, or `None`
+/// when the eye or the light lies in the plane.
+fn plane_optimal_axis(problem: &ShadowProblem, frame: &crate::LightFrame, plane: &Plane) -> Option<DVec3> {
+    // Homogeneous coordinates y on the plane: [x; 1] = P y, columns
+    // (p0, 1), (u, 0), (v, 0).
+    let p0 = plane.normal * -plane.offset;
+    let (u, v) = plane.normal.any_orthonormal_pair();
+    let columns = [p0.extend(1.0), u.extend(0.0), v.extend(0.0)];
+    // Screen rows x, y, w of `S` (pixels, homogeneous) and the light rows `T`.
+    let screen = problem.camera().screen_from_world();
+    let s_rows = [screen.row(0), screen.row(1), screen.row(3)];
+    let t_rows = frame.light_from_world_3x4_rows();
+    let restrict = |rows: [glam::DVec4; 3]| {
+        DMat3::from_cols_array_2d(&std::array::from_fn(|c| std::array::from_fn(|r| rows[r].dot(columns[c]))))
+    };
+    let pixel_from_plane = restrict(s_rows);
+    let light_from_plane = restrict(t_rows);
+    // x̂ = (S P) y and X~ = (T P) y, so x̂ = (S P)(T P)⁻¹ X~ and j is row 3.
+    let det = light_from_plane.determinant();
+    let light_scale = light_from_plane.to_cols_array().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if !(det.abs() > 1e-12 * light_scale.powi(3)) || !(pixel_from_plane.determinant().abs() > 0.0) {
+        return None;
+    }
+    let pixel_from_light = pixel_from_plane * light_from_plane.inverse();
+    let axis = pixel_from_light.row(2);
+    // The eye in the plane makes the w row of S P vanish on the plane's frame.
+    let eye_distance = plane.signed_distance(problem.camera().eye()).abs();
+    if !(eye_distance > problem.eps()) {
+        return None;
+    }
+    axis.try_normalize()
+}

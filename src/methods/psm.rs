@@ -1,0 +1,223 @@
+//! Perspective shadow maps (Stamminger & Drettakis 2002).
+//!
+//! The map is built in the camera's post-perspective space (PPS), where the
+//! view frustum is a cube and distant receivers shrink, so a map uniform in
+//! PPS spends more texels near the viewer. Steps:
+//!
+//! 1. `H = conv(V ∪ l) ∩ S ∩ L`, the points that must be in the map.
+//! 2. Virtual camera shift: if part of `H` lies behind the camera's near
+//!    plane, the shadow camera (only it) moves back along the view axis by
+//!    `δ = max(0, max_v (z_v + near))` so all of `H` maps to `w > 0` in PPS.
+//!    `near` stays (or is pushed out to a read-back minimum view depth),
+//!    `far` grows by `δ`. As `δ → ∞` PSM tends to a uniform map.
+//! 3. The light moves to PPS as a homogeneous point `L' = M [l; 1]` (or
+//!    `M [-d; 0]`). Its `w'` tells the case: `> 0` an ordinary point light,
+//!    `≈ 0` a directional light in PPS (the ideal case: light parallel to
+//!    the image plane), `< 0` the *inverted* case (light behind the viewer).
+//! 4. The light frustum's axis in PPS is the axis of the narrowest cone
+//!    around the directions `D(p) = L'_w p' - p'_w L'_xyz` to the points of
+//!    `H`; this formula covers all three cases (for `w' < 0` it reverses the
+//!    directions, which is the inverted case's frustum).
+//! 5. The frustum's `w` row, pulled back to world space, is the optical axis
+//!    `j`; the shared affine fit and depth row finish the matrix.
+//!
+//! The inverted case is classically rendered with a reversed depth test,
+//! because PPS depth runs backwards there. lixel rebuilds the depth row from
+//! light-space distance (see [`DepthRange`](crate::DepthRange)), which is
+//! monotone away from the light in every case, so the ordinary test works.
+
+use glam::{DMat4, DVec3, DVec4};
+
+use crate::error::Result;
+use crate::geometry::{min_enclosing_cone, ConvexPolyhedron};
+use crate::light::LightFrame;
+use crate::matrix::{Fallback, LightMatrix, Method};
+use crate::problem::ShadowProblem;
+
+/// Options of [`Parameterization::Psm`](crate::Parameterization::Psm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PsmOptions {
+    /// A known lower bound of the view depth of every visible receiver (for
+    /// example the minimum of a read-back depth buffer). PSM's near plane is
+    /// pushed out to it (never in): the further, the better PSM distributes
+    /// texels. `None` keeps the camera's near plane.
+    pub min_view_depth: Option<f64>,
+}
+
+impl PsmOptions {
+    /// The defaults: the camera's near plane.
+    pub const DEFAULT: Self = Self { min_view_depth: None };
+}
+
+impl Default for PsmOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Where the light lands in PSM's post-perspective space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PsmLightCase {
+    /// In front of the camera plane: an ordinary point light in PPS.
+    Regular,
+    /// On the camera plane (`w' ≈ 0`): a directional light in PPS.
+    Directional,
+    /// Behind the camera plane: the inverted case.
+    Inverted,
+}
+
+/// The post-perspective transform PSM works in, with the shift it applied.
+struct PostPerspective {
+    /// World to (shifted, near-adjusted) camera clip space.
+    clip_from_world: DMat4,
+    /// The light as a homogeneous point in that space.
+    light: DVec4,
+}
+
+fn post_perspective(problem: &ShadowProblem, options: &PsmOptions, hull: &ConvexPolyhedron) -> PostPerspective {
+    let camera = problem.camera();
+    let near = options
+        .min_view_depth
+        .filter(|d| d.is_finite())
+        .map_or(camera.z_near(), |d| d.max(camera.z_near()));
+    let view = camera.view_from_world();
+    // Virtual shift: every vertex of H must be at least `near` in front.
+    let delta = hull
+        .vertices()
+        .iter()
+        .map(|&p| (view * p.extend(1.0)).z + near)
+        .fold(0.0_f64, f64::max);
+    let far = camera.z_far().max(near * (1.0 + 1e-6)) + delta;
+    let shifted_view = DMat4::from_translation(DVec3::new(0.0, 0.0, -delta)) * view;
+    // Keep the camera's x/y rows (asymmetric or jittered frusta included) and
+    // replace the depth row by one for [near, far]: z_ndc = (a z + b) / (-z).
+    let mut proj = camera.clip_from_view();
+    let a = far / (near - far);
+    proj.z_axis.z = a;
+    proj.w_axis.z = a * near;
+    let clip_from_world = proj * shifted_view;
+    PostPerspective { clip_from_world, light: clip_from_world * problem.light().homogeneous_position() }
+}
+
+/// Which PSM case a configuration falls in (for reports and tests).
+#[must_use]
+pub fn psm_light_case(problem: &ShadowProblem, options: &PsmOptions) -> PsmLightCase {
+    let pps = post_perspective(problem, options, &problem.psm_hull());
+    classify(problem, pps.light)
+}
+
+fn classify(problem: &ShadowProblem, light: DVec4) -> PsmLightCase {
+    let tol = problem.tolerances().psm_directional_w * light.truncate().length();
+    if light.w.abs() <= tol {
+        PsmLightCase::Directional
+    } else if light.w > 0.0 {
+        PsmLightCase::Regular
+    } else {
+        PsmLightCase::Inverted
+    }
+}
+
+pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions) -> Result<LightMatrix> {
+    let focus = problem.visible_receiver_body();
+    if focus.is_empty() {
+        return super::focused::solve_as(problem, Method::Psm, None);
+    }
+    let hull = problem.psm_hull();
+    let frame = problem.frame_towards(&focus);
+    // First choice: the whole hull H. If H wraps around the light, PSM's own
+    // light frustum does not exist; fit PPS around the visible receivers
+    // alone, and failing that use the focused map.
+    if let Some(matrix) = psm_axis(problem, options, &hull, &frame)
+        .and_then(|axis| place(problem, frame, axis, &hull, &focus, None).ok())
+    {
+        return Ok(matrix);
+    }
+    let fallback = Some(Fallback::PsmHullAroundLight);
+    if let Some(matrix) = psm_axis(problem, options, &focus, &frame)
+        .and_then(|axis| place(problem, frame, axis, &focus, &focus, fallback).ok())
+    {
+        return Ok(matrix);
+    }
+    super::focused::solve_as(problem, Method::Psm, fallback)
+}
+
+/// Map around `region` (with the visible receivers), depth over their casters.
+fn place(
+    problem: &ShadowProblem,
+    frame: LightFrame,
+    axis: DVec3,
+    region: &ConvexPolyhedron,
+    focus: &ConvexPolyhedron,
+    fallback: Option<Fallback>,
+) -> Result<LightMatrix> {
+    let at_light = problem.eps() * 1e3;
+    let mut points: Vec<DVec3> = region
+        .vertices()
+        .iter()
+        .copied()
+        .filter(|&p| frame.homogeneous(p).length() > at_light || frame.is_orthographic())
+        .collect();
+    points.extend_from_slice(focus.vertices());
+    let casters = problem.caster_body(focus);
+    crate::matrix::Placement {
+        frame,
+        axis,
+        focus: &points,
+        depth_points: casters.vertices(),
+        map: problem.map_size(),
+        fit: problem.fit_options(),
+        tolerances: problem.tolerances(),
+        method: Method::Psm,
+        fallback,
+    }
+    .build(&mut crate::fit::FitWorkspace::default())
+}
+
+/// PSM's optical axis for `region`, in light coordinates of `frame`; `None`
+/// when the directions from the light to `region` do not fit in a cone.
+fn psm_axis(
+    problem: &ShadowProblem,
+    options: &PsmOptions,
+    region: &ConvexPolyhedron,
+    frame: &LightFrame,
+) -> Option<DVec3> {
+    if region.is_empty() {
+        return None;
+    }
+    let pps = post_perspective(problem, options, region);
+    let l = pps.light;
+    let at_light = problem.eps() * 1e3;
+    let dirs: Vec<DVec3> = region
+        .vertices()
+        .iter()
+        .filter(|&&p| frame.is_orthographic() || frame.homogeneous(p).length() > at_light)
+        .map(|&p| {
+            let q = pps.clip_from_world * p.extend(1.0);
+            q.truncate() * l.w - l.truncate() * q.w
+        })
+        .collect();
+    let cone = min_enclosing_cone(&dirs)?;
+    if cone.cos_half_angle <= problem.tolerances().min_front_cosine {
+        return None;
+    }
+    // The light frustum's w row in PPS, `(L'_w a, -a·L'_xyz)`, pulled back.
+    let a = cone.axis;
+    let row_pps = (a * l.w).extend(-a.dot(l.truncate()));
+    let row_world = pps.clip_from_world.transpose() * row_pps;
+    let axis = frame_axis_from_world_row(frame, row_world);
+    (axis.is_finite() && axis.length_squared() > 0.0).then_some(axis)
+}
+
+/// The `j` with `j · X~(x) = ρ · [x; 1]` for a world row `ρ` that vanishes at
+/// the light.
+pub(crate) fn frame_axis_from_world_row(frame: &LightFrame, row: DVec4) -> DVec3 {
+    match *frame {
+        // X~ = R (x - l): j·X~ = (Rᵀj)·x - (Rᵀj)·l, so Rᵀ j = ρ_xyz.
+        LightFrame::Perspective { rotation, .. } => rotation * row.truncate(),
+        // X~ = (r1·x, r2·x, 1): j = (ρ_xyz·r1, ρ_xyz·r2, ρ_w).
+        LightFrame::Orthographic { rotation } => {
+            let r = row.truncate();
+            DVec3::new(r.dot(rotation.row(0)), r.dot(rotation.row(1)), row.w)
+        }
+    }
+}

@@ -1,0 +1,271 @@
+//! [`ShadowProblem`]: one validated camera, light, scene and map size, and the
+//! convex bodies every method builds on.
+
+use glam::{DVec3, DVec4};
+
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::fit::{AffineFitOptions, FitWorkspace};
+use crate::geometry::{ConvexPolyhedron, Plane};
+use crate::light::{Light, LightFrame};
+use crate::matrix::{Fallback, LightMatrix, Method, Placement};
+use crate::methods::{self, Parameterization};
+use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
+use crate::tolerance::Tolerances;
+
+/// Sides of the pyramid that stands in for a spot light's cone (it
+/// circumscribes the cone, so it never loses a lit point).
+const SPOT_PYRAMID_SIDES: usize = 8;
+
+/// One shadow-map problem: a camera, a light, where casters and receivers are,
+/// and the map's size, validated once. Every method is a call on it.
+///
+/// ```
+/// use glam::{DVec3, UVec2};
+/// use lixel::{Aabb, Camera, Light, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
+///
+/// let camera = Camera::look_at(
+///     DVec3::new(0.0, 1.7, 0.0), DVec3::new(0.0, 1.0, -10.0), DVec3::Y,
+///     60f64.to_radians(), UVec2::new(1024, 768), 0.1, 100.0)?;
+/// let floor = Aabb::from_corners(DVec3::new(-50.0, 0.0, -50.0), DVec3::new(50.0, 0.0, 50.0));
+/// let objects = Aabb::from_corners(DVec3::new(-50.0, 0.0, -50.0), DVec3::new(50.0, 5.0, 50.0));
+/// let bounds = SceneBounds { casters: objects, receivers: objects.union(&floor) };
+/// let sun = Light::directional(DVec3::new(1.0, -1.0, 0.3));
+/// let problem = ShadowProblem::new(camera, sun, bounds, ShadowMapSize::square(2048))?;
+/// let matrix = problem.solve(&Parameterization::LiSpsm(Default::default()))?;
+/// assert!(matrix.covers(DVec3::new(0.0, 0.0, -10.0), 1e-9));
+/// # Ok::<(), lixel::LixelError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct ShadowProblem {
+    camera: Camera,
+    light: Light,
+    bounds: SceneBounds,
+    map: ShadowMapSize,
+    fit: AffineFitOptions,
+    tolerances: Tolerances,
+    scale: f64,
+}
+
+impl ShadowProblem {
+    /// Validates the inputs.
+    ///
+    /// # Errors
+    /// Whatever [`Light::validate`], [`SceneBounds::validate`] and
+    /// [`ShadowMapSize::validate`] report. A [`Camera`] is valid by construction.
+    pub fn new(camera: Camera, light: Light, bounds: SceneBounds, map: ShadowMapSize) -> Result<Self> {
+        light.validate()?;
+        bounds.validate()?;
+        map.validate()?;
+        let scene = bounds.scene();
+        let mut scale = scene.diagonal().max(scene.min.abs().max(scene.max.abs()).max_element() * 1e-6);
+        if !(scale > 0.0) {
+            scale = 1.0;
+        }
+        Ok(Self { camera, light, bounds, map, fit: AffineFitOptions::default(), tolerances: Tolerances::default(), scale })
+    }
+
+    /// Replaces the affine-fit options (margin, shear) used by every method.
+    #[must_use]
+    pub fn with_fit(mut self, fit: AffineFitOptions) -> Self {
+        self.fit = fit;
+        self
+    }
+
+    /// Replaces the tolerances.
+    #[must_use]
+    pub fn with_tolerances(mut self, tolerances: Tolerances) -> Self {
+        self.tolerances = tolerances;
+        self
+    }
+
+    /// Computes the light matrix of one parameterization.
+    ///
+    /// # Errors
+    /// See [`LixelError`](crate::LixelError); chiefly
+    /// [`LightInsideFocus`](crate::LixelError::LightInsideFocus) when a
+    /// point light sits inside the region its single map must cover.
+    pub fn solve(&self, parameterization: &Parameterization) -> Result<LightMatrix> {
+        methods::solve(self, parameterization)
+    }
+
+    /// The camera.
+    #[must_use]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The light.
+    #[must_use]
+    pub fn light(&self) -> &Light {
+        &self.light
+    }
+
+    /// The scene bounds.
+    #[must_use]
+    pub fn bounds(&self) -> &SceneBounds {
+        &self.bounds
+    }
+
+    /// The shadow-map size.
+    #[must_use]
+    pub fn map_size(&self) -> ShadowMapSize {
+        self.map
+    }
+
+    /// The affine-fit options.
+    #[must_use]
+    pub fn fit_options(&self) -> &AffineFitOptions {
+        &self.fit
+    }
+
+    /// The tolerances.
+    #[must_use]
+    pub fn tolerances(&self) -> &Tolerances {
+        &self.tolerances
+    }
+
+    /// Length scale of the problem (scene diagonal): tolerances are relative to it.
+    #[must_use]
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Absolute plane tolerance for convex-body operations.
+    #[must_use]
+    pub fn eps(&self) -> f64 {
+        self.tolerances.plane_eps * self.scale
+    }
+
+    /// The view frustum `V` as the six half-spaces of the camera's clip volume.
+    #[must_use]
+    pub fn view_planes(&self) -> Vec<Plane> {
+        let m = self.camera.clip_from_world();
+        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+        // Inside: h·[x; 1] >= 0 for each of these.
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
+            .into_iter()
+            .filter_map(|h| plane_from_inside_halfspace(h))
+            .collect()
+    }
+
+    /// The view frustum `V` as a polyhedron (may be huge for a far far plane).
+    #[must_use]
+    pub fn view_body(&self) -> ConvexPolyhedron {
+        ConvexPolyhedron::from_frustum_corners(&self.camera.frustum_corners()).unwrap_or_else(ConvexPolyhedron::empty)
+    }
+
+    /// The light's own frustum `L` as half-spaces: empty (everything) for
+    /// point and directional lights; a pyramid circumscribing the cone for
+    /// spot lights.
+    #[must_use]
+    pub fn light_planes(&self) -> Vec<Plane> {
+        let Light::Spot { position, direction, outer_half_angle_radians } = self.light else {
+            return Vec::new();
+        };
+        let (e1, e2) = direction.any_orthonormal_pair();
+        let (sin_a, cos_a) = outer_half_angle_radians.sin_cos();
+        (0..SPOT_PYRAMID_SIDES)
+            .map(|k| {
+                let phi = std::f64::consts::TAU * k as f64 / SPOT_PYRAMID_SIDES as f64;
+                let radial = e1 * phi.cos() + e2 * phi.sin();
+                // Tangent to the cone along `radial`, pointing outwards.
+                Plane::from_point_normal(position, (radial * cos_a - direction * sin_a).normalize())
+            })
+            .collect()
+    }
+
+    /// A box as a polyhedron, clipped by the light frustum `L`.
+    fn box_in_light(&self, aabb: &Aabb) -> ConvexPolyhedron {
+        ConvexPolyhedron::from_aabb(aabb.min, aabb.max).clip_all(self.light_planes().iter(), self.eps())
+    }
+
+    /// All receivers the light can reach: `R ∩ L` (what a normal map covers).
+    #[must_use]
+    pub fn receiver_body(&self) -> ConvexPolyhedron {
+        self.box_in_light(&self.bounds.receivers)
+    }
+
+    /// The visible receivers the light can reach: `V ∩ R ∩ L`. Every method's
+    /// map must contain this body.
+    #[must_use]
+    pub fn visible_receiver_body(&self) -> ConvexPolyhedron {
+        self.receiver_body().clip_all(self.view_planes().iter(), self.eps())
+    }
+
+    /// PSM's hull `H = conv(V ∪ l) ∩ S ∩ L` (for a directional light, `V`
+    /// extruded towards the light).
+    #[must_use]
+    pub fn psm_hull(&self) -> ConvexPolyhedron {
+        let planes = self.towards_light_planes(&self.view_body());
+        self.box_in_light(&self.bounds.scene()).clip_all(planes.iter(), self.eps())
+    }
+
+    /// The casters that can shadow `focus`: `conv(focus ∪ l) ∩ C` (point and
+    /// spot lights) or `focus` extruded towards the light `∩ C` (directional).
+    #[must_use]
+    pub fn caster_body(&self, focus: &ConvexPolyhedron) -> ConvexPolyhedron {
+        if focus.is_empty() {
+            return ConvexPolyhedron::empty();
+        }
+        let planes = self.towards_light_planes(focus);
+        ConvexPolyhedron::from_aabb(self.bounds.casters.min, self.bounds.casters.max).clip_all(planes.iter(), self.eps())
+    }
+
+    /// Half-spaces of `body` grown towards the light (hull with the light's
+    /// position, or extrusion along the reversed light direction).
+    fn towards_light_planes(&self, body: &ConvexPolyhedron) -> Vec<Plane> {
+        match self.light {
+            Light::Directional { direction } => body.extrusion_planes(-direction, self.eps()),
+            Light::Point { position } | Light::Spot { position, .. } => {
+                body.hull_with_point_planes(position, self.eps())
+            }
+        }
+    }
+
+    /// The light frame used for a body to be mapped: a spot light's own axis,
+    /// towards the body for a point light.
+    pub(crate) fn frame_towards(&self, focus: &ConvexPolyhedron) -> LightFrame {
+        let forward = match self.light.position() {
+            Some(l) if !focus.is_empty() => {
+                let d = focus.centroid() - l;
+                if d.length_squared() > 0.0 { d } else { DVec3::NEG_Y }
+            }
+            _ => DVec3::NEG_Y,
+        };
+        LightFrame::new(&self.light, forward)
+    }
+
+    /// Builds the matrix for axis `axis` (light coordinates of `frame`)
+    /// around `focus`, with depth covering the casters of `focus`.
+    pub(crate) fn place(
+        &self,
+        frame: LightFrame,
+        axis: DVec3,
+        focus: &ConvexPolyhedron,
+        method: Method,
+        fallback: Option<Fallback>,
+    ) -> Result<LightMatrix> {
+        let casters = self.caster_body(focus);
+        Placement {
+            frame,
+            axis,
+            focus: focus.vertices(),
+            depth_points: casters.vertices(),
+            map: self.map,
+            fit: &self.fit,
+            tolerances: &self.tolerances,
+            method,
+            fallback,
+        }
+        .build(&mut FitWorkspace::default())
+    }
+}
+
+/// The plane `{x : h·[x; 1] = 0}` with `h·[x; 1] >= 0` as the kept side.
+fn plane_from_inside_halfspace(h: DVec4) -> Option<Plane> {
+    let n = h.truncate();
+    let len = n.length();
+    (len > 0.0 && len.is_finite() && h.w.is_finite())
+        .then(|| Plane { normal: -n / len, offset: -h.w / len })
+}

@@ -1,0 +1,147 @@
+//! Seeded random shadow configurations shared by the property tests and benches.
+#![allow(dead_code)]
+
+use glam::{DVec3, UVec2};
+use lixel::{Aabb, Camera, Light, SceneBounds, ShadowMapSize, ShadowProblem};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Number of configurations per method: `LIXEL_PROP_CASES` or 10 000.
+pub fn cases() -> usize {
+    std::env::var("LIXEL_PROP_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(10_000)
+}
+
+/// A fully specified configuration (printable, to turn failures into regressions).
+#[derive(Clone, Copy, Debug)]
+pub struct Config {
+    pub eye: DVec3,
+    pub target: DVec3,
+    pub up: DVec3,
+    pub fov_y: f64,
+    pub viewport: UVec2,
+    pub z_near: f64,
+    pub z_far: f64,
+    pub light: Light,
+    pub bounds: SceneBounds,
+    pub map: ShadowMapSize,
+}
+
+impl Config {
+    pub fn camera(&self) -> Option<Camera> {
+        Camera::look_at(self.eye, self.target, self.up, self.fov_y, self.viewport, self.z_near, self.z_far).ok()
+    }
+
+    pub fn problem(&self) -> Option<ShadowProblem> {
+        ShadowProblem::new(self.camera()?, self.light, self.bounds, self.map).ok()
+    }
+}
+
+fn log_uniform(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
+    (rng.random_range(lo.ln()..hi.ln())).exp()
+}
+
+fn unit(rng: &mut impl Rng) -> DVec3 {
+    loop {
+        let v = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let l = v.length();
+        if l > 1e-3 && l <= 1.0 {
+            return v / l;
+        }
+    }
+}
+
+fn point_in(rng: &mut impl Rng, b: &Aabb) -> DVec3 {
+    DVec3::new(
+        if b.max.x > b.min.x { rng.random_range(b.min.x..=b.max.x) } else { b.min.x },
+        if b.max.y > b.min.y { rng.random_range(b.min.y..=b.max.y) } else { b.min.y },
+        if b.max.z > b.min.z { rng.random_range(b.min.z..=b.max.z) } else { b.min.z },
+    )
+}
+
+/// The i-th configuration of stream `seed`. Every tenth kind is a hard case:
+/// light along ±view, light parallel to the image plane, point light inside
+/// the view frustum or behind the camera, extreme near/far, tiny/huge scenes.
+pub fn config(seed: u64, index: usize) -> Config {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index as u64);
+    let scale = match index % 7 {
+        0 => log_uniform(&mut rng, 1e-3, 1e-1),
+        1 => log_uniform(&mut rng, 1e3, 1e5),
+        _ => log_uniform(&mut rng, 0.5, 200.0),
+    };
+    // A floor with objects on it (walkthrough scenes), or a random box.
+    let walkthrough = rng.random_bool(0.6);
+    let (bounds, eye, target) = if walkthrough {
+        let floor = Aabb::from_corners(DVec3::new(-scale, 0.0, -scale), DVec3::new(scale, 0.0, scale));
+        let height = scale * rng.random_range(0.01..0.3);
+        let objects = Aabb::from_corners(DVec3::new(-scale, 0.0, -scale), DVec3::new(scale, height, scale));
+        let eye = DVec3::new(
+            rng.random_range(-scale..scale),
+            height * rng.random_range(0.05..2.0),
+            rng.random_range(-scale..scale),
+        );
+        let dir = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-0.5..0.1), rng.random_range(-1.0..1.0));
+        let dir = dir.try_normalize().unwrap_or(DVec3::NEG_Z);
+        (SceneBounds { casters: objects, receivers: objects.union(&floor) }, eye, eye + dir * scale)
+    } else {
+        let a = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let b = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let receivers = Aabb::from_corners(a * scale, b * scale);
+        let casters = if rng.random_bool(0.5) {
+            receivers
+        } else {
+            let c = point_in(&mut rng, &receivers);
+            let d = point_in(&mut rng, &receivers);
+            Aabb::from_corners(c, d)
+        };
+        let eye = if rng.random_bool(0.5) {
+            point_in(&mut rng, &receivers)
+        } else {
+            unit(&mut rng) * scale * rng.random_range(1.0..5.0)
+        };
+        let target = point_in(&mut rng, &receivers);
+        (SceneBounds { casters, receivers }, eye, target)
+    };
+    let target = if (target - eye).length() < 1e-6 * scale { eye + DVec3::NEG_Z * scale } else { target };
+    let view = (target - eye).normalize();
+    let up = if view.cross(DVec3::Y).length() < 1e-3 { DVec3::X } else { DVec3::Y };
+    let (z_near, z_far) = match index % 11 {
+        3 => (scale * 1e-6, scale * 1e4),
+        4 => (scale * 1e-2, scale * 1e-1),
+        _ => {
+            let n = scale * log_uniform(&mut rng, 1e-4, 1e-1);
+            (n, n * log_uniform(&mut rng, 10.0, 1e5))
+        }
+    };
+    let fov_y = rng.random_range(10f64..140.0).to_radians();
+    let viewport = UVec2::new(rng.random_range(16..2048), rng.random_range(16..2048));
+    let map = match index % 5 {
+        0 => ShadowMapSize::new(rng.random_range(1..4096), rng.random_range(1..64)),
+        1 => ShadowMapSize::new(rng.random_range(1..64), rng.random_range(1..4096)),
+        _ => ShadowMapSize::square(rng.random_range(16..4096)),
+    };
+    let (right, _) = view.any_orthonormal_pair();
+    let far_away = scale * rng.random_range(3.0..50.0);
+    let light = match index % 13 {
+        // Exactly along the view direction, both ways.
+        0 => Light::directional(view),
+        1 => Light::directional(-view),
+        // Parallel to the image plane.
+        2 => Light::directional(right),
+        // Point light inside the view frustum, in front of the eye.
+        3 => Light::point(eye + view * scale * rng.random_range(0.01..0.5)),
+        // Point light on the view axis behind the camera.
+        4 => Light::point(eye - view * far_away),
+        // Point light on the view axis far ahead.
+        5 => Light::point(eye + view * far_away),
+        // Point light inside the scene bounds.
+        6 => Light::point(point_in(&mut rng, &bounds.scene())),
+        7 | 8 => {
+            let position = bounds.scene().center() + unit(&mut rng) * far_away;
+            let aim = (point_in(&mut rng, &bounds.receivers) - position).normalize() + unit(&mut rng) * 0.3;
+            Light::spot(position, aim, rng.random_range(5f64..85.0).to_radians())
+        }
+        9 | 10 => Light::point(bounds.scene().center() + unit(&mut rng) * far_away),
+        _ => Light::directional(unit(&mut rng)),
+    };
+    Config { eye, target, up, fov_y, viewport, z_near, z_far, light, bounds, map }
+}
