@@ -19,9 +19,7 @@ fn methods(c: &mut Criterion) {
             BenchmarkId::new(parameterization.method().name(), problems.len()),
             &parameterization,
             |b, p| {
-                b.iter(|| {
-                    problems.iter().map(|problem| problem.solve(p).is_ok() as usize).sum::<usize>()
-                });
+                b.iter(|| problems.iter().map(|problem| problem.solve(p).is_ok() as usize).sum::<usize>());
             },
         );
     }

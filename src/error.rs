@@ -57,6 +57,14 @@ pub enum LixelError {
         /// The method that was asked for.
         method: Method,
     },
+    /// The camera sees no receiver the light reaches, and the fallback (a
+    /// normal map of all receivers) is impossible because the point light
+    /// sits inside the receiver bounds. No shadow is visible; no map is needed.
+    #[error("{method:?}: nothing visible to shadow, and a normal map is impossible")]
+    NothingVisible {
+        /// The method that was asked for.
+        method: Method,
+    },
     /// No optical axis puts every relevant point safely in front of the
     /// light (an internal invariant of the method failed; please report it).
     #[error("{method:?}: relevant points lie behind the light's image plane")]

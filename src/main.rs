@@ -2,13 +2,13 @@
 //!
 //! `lixel methods` computes every classical light matrix for the built-in
 //! default configuration (a viewer just above a floor with objects on it, one
-//! light) and prints how well each one samples the visible floor.
+//! light) and prints how well each one samples the visible floor (one sample per pixel of a grid over the screen).
 
 use std::process::ExitCode;
 
 use glam::{DVec3, UVec2};
-use lixel::score::badness_stats;
-use lixel::{Aabb, Camera, Light, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
+use lixel::score::{badness_stats, plane_samples};
+use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
 const USAGE: &str = "\
 usage: lixel methods [--light x,y,z] [--point] [--map N] [--samples N]
@@ -16,12 +16,15 @@ usage: lixel methods [--light x,y,z] [--point] [--map N] [--samples N]
 Computes every classical light matrix (normal, focused, PSM, LiSPSM,
 plane-optimal) for the built-in walkthrough configuration and prints the
 badness (screen pixels per texel, squared; lower is better) they give on the
-visible floor.
+visible floor (one sample per pixel of a grid over the screen).
 
   --light x,y,z   light direction (directional) or position (--point); default 0.4,-1,0.2
   --point         make the light a point light at --light
   --map N         shadow-map size N x N (default 400)
-  --samples N     floor samples per axis (default 200)";
+  --samples N     pixel grid N x N for the floor samples (default 200)
+
+The last row, psm+readback, is PSM with its near plane pushed out to the
+nearest visible floor point, as a depth readback would allow.";
 
 struct Args {
     light: DVec3,
@@ -41,8 +44,11 @@ fn parse(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
         let mut value = || args.next().ok_or_else(|| format!("{flag} needs a value"));
         match flag.as_str() {
             "--light" => {
-                let v: Vec<f64> =
-                    value()?.split(',').map(str::parse).collect::<Result<_, _>>().map_err(|e| format!("--light: {e}"))?;
+                let v: Vec<f64> = value()?
+                    .split(',')
+                    .map(str::parse)
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| format!("--light: {e}"))?;
                 let [x, y, z] = v[..] else { return Err("--light needs x,y,z".into()) };
                 parsed.light = DVec3::new(x, y, z);
             }
@@ -73,21 +79,21 @@ fn run(args: &Args) -> Result<(), lixel::LixelError> {
     let light = if args.point { Light::point(args.light) } else { Light::directional(args.light) };
     let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(args.map))?;
 
-    let n = args.samples.max(2);
-    let floor_samples: Vec<(DVec3, DVec3)> = (0..n * n)
-        .map(|k| {
-            let (i, j) = ((k % n) as f64 / (n - 1) as f64, (k / n) as f64 / (n - 1) as f64);
-            (DVec3::new(-40.0 + 80.0 * i, 0.0, -40.0 + 80.0 * j), DVec3::Y)
-        })
-        .filter(|(p, _)| {
-            let c = camera.clip_from_world() * p.extend(1.0);
-            c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w && c.z >= 0.0 && c.z <= c.w
-        })
-        .collect();
-    println!("{} visible floor samples, {}x{} map, {light:?}", floor_samples.len(), args.map, args.map);
+    let n = u32::try_from(args.samples.max(2)).unwrap_or(u32::MAX);
+    let floor_plane = lixel::geometry::Plane::from_point_normal(DVec3::ZERO, DVec3::Y);
+    let floor_samples = plane_samples(&camera, &floor_plane, &floor, UVec2::new(n, n));
+    // What a depth readback would supply to PSM: the nearest visible receiver.
+    let nearest = floor_samples.iter().map(|(p, _)| camera.view_depth(*p)).fold(f64::INFINITY, f64::min);
+    println!(
+        "{} floor samples (one per pixel of a {n}x{n} grid), {}x{} map, {light:?}",
+        floor_samples.len(),
+        args.map,
+        args.map
+    );
     println!("{:<15} {:>12} {:>12} {:>12}  fallback", "method", "median b", "mean b", "max b");
-    for parameterization in Parameterization::ALL_DEFAULT {
-        let name = parameterization.method().name();
+    let psm_near = Parameterization::Psm(PsmOptions { min_view_depth: nearest.is_finite().then_some(nearest) });
+    let methods = Parameterization::ALL_DEFAULT.iter().map(|p| (p.method().name(), *p));
+    for (name, parameterization) in methods.chain([("psm+readback", psm_near)]) {
         match problem.solve(&parameterization) {
             Ok(matrix) => {
                 let stats = badness_stats(&matrix, &camera, floor_samples.iter().copied());

@@ -73,6 +73,9 @@ pub enum Fallback {
     /// Plane-optimal: the eye or the light lies in the receiver plane, so the
     /// plane's homography is singular; the focused map was used.
     PlaneDegenerate,
+    /// Plane-optimal: the view frustum sees no part of the receiver plane
+    /// inside the receiver bounds; the focused map was used.
+    PlaneNotVisible,
     /// Scene-optimized: no usable samples; the focused map was used.
     NoUsableSamples,
 }
@@ -166,8 +169,7 @@ impl LightMatrix {
     /// in front of the light).
     #[must_use]
     pub fn covers(&self, world: DVec3, slack: f64) -> bool {
-        self.project(world)
-            .is_some_and(|ndc| ndc.x.abs() <= 1.0 + slack && ndc.y.abs() <= 1.0 + slack)
+        self.project(world).is_some_and(|ndc| ndc.x.abs() <= 1.0 + slack && ndc.y.abs() <= 1.0 + slack)
     }
 }
 

@@ -62,7 +62,15 @@ impl ShadowProblem {
         if !(scale > 0.0) {
             scale = 1.0;
         }
-        Ok(Self { camera, light, bounds, map, fit: AffineFitOptions::default(), tolerances: Tolerances::default(), scale })
+        Ok(Self {
+            camera,
+            light,
+            bounds,
+            map,
+            fit: AffineFitOptions::default(),
+            tolerances: Tolerances::default(),
+            scale,
+        })
     }
 
     /// Replaces the affine-fit options (margin, shear) used by every method.
@@ -145,7 +153,7 @@ impl ShadowProblem {
         // Inside: h·[x; 1] >= 0 for each of these.
         [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
             .into_iter()
-            .filter_map(|h| plane_from_inside_halfspace(h))
+            .filter_map(plane_from_inside_halfspace)
             .collect()
     }
 
@@ -209,7 +217,8 @@ impl ShadowProblem {
             return ConvexPolyhedron::empty();
         }
         let planes = self.towards_light_planes(focus);
-        ConvexPolyhedron::from_aabb(self.bounds.casters.min, self.bounds.casters.max).clip_all(planes.iter(), self.eps())
+        ConvexPolyhedron::from_aabb(self.bounds.casters.min, self.bounds.casters.max)
+            .clip_all(planes.iter(), self.eps())
     }
 
     /// Half-spaces of `body` grown towards the light (hull with the light's
@@ -229,7 +238,11 @@ impl ShadowProblem {
         let forward = match self.light.position() {
             Some(l) if !focus.is_empty() => {
                 let d = focus.centroid() - l;
-                if d.length_squared() > 0.0 { d } else { DVec3::NEG_Y }
+                if d.length_squared() > 0.0 {
+                    d
+                } else {
+                    DVec3::NEG_Y
+                }
             }
             _ => DVec3::NEG_Y,
         };
@@ -266,6 +279,5 @@ impl ShadowProblem {
 fn plane_from_inside_halfspace(h: DVec4) -> Option<Plane> {
     let n = h.truncate();
     let len = n.length();
-    (len > 0.0 && len.is_finite() && h.w.is_finite())
-        .then(|| Plane { normal: -n / len, offset: -h.w / len })
+    (len > 0.0 && len.is_finite() && h.w.is_finite()).then(|| Plane { normal: -n / len, offset: -h.w / len })
 }

@@ -6,7 +6,10 @@
 //! pixels one texel covers: `b <= 1` means a texel is no larger than a pixel.
 //! Lower is better.
 
-use glam::{DMat2, DMat4, DVec2, DVec3, DVec4};
+use glam::{DMat2, DMat4, DVec2, DVec3, DVec4, UVec2};
+
+use crate::geometry::Plane;
+use crate::scene::Aabb;
 
 use crate::camera::Camera;
 use crate::matrix::LightMatrix;
@@ -96,10 +99,34 @@ pub fn badness_stats(
     values.sort_by(f64::total_cmp);
     let count = values.len();
     let median = if count % 2 == 1 { values[count / 2] } else { 0.5 * (values[count / 2 - 1] + values[count / 2]) };
-    Some(BadnessStats {
-        count,
-        median,
-        mean: values.iter().sum::<f64>() / count as f64,
-        max: values[count - 1],
-    })
+    Some(BadnessStats { count, median, mean: values.iter().sum::<f64>() / count as f64, max: values[count - 1] })
+}
+
+/// The points of a plane seen through a `grid` of pixel centres spread over
+/// the screen, kept when they lie within the view frustum's depth range and
+/// inside `region` (a box; use a flat box for a floor). Each comes with the
+/// plane's normal turned towards the camera. Statistics over these weigh
+/// the plane as the screen does.
+#[must_use]
+pub fn plane_samples(camera: &Camera, plane: &Plane, region: &Aabb, grid: UVec2) -> Vec<(DVec3, DVec3)> {
+    let world_from_screen = camera.screen_from_world().inverse();
+    let size = camera.viewport().as_dvec2();
+    let cells = grid.max(UVec2::ONE).as_dvec2();
+    let normal = if plane.signed_distance(camera.eye()) >= 0.0 { plane.normal } else { -plane.normal };
+    let slack = 1e-9 * region.diagonal().max(f64::MIN_POSITIVE);
+    let inside = |p: DVec3| (p.cmpge(region.min - slack) & p.cmple(region.max + slack)).all();
+    (0..grid.x * grid.y)
+        .filter_map(|k| {
+            let cell = DVec2::new(f64::from(k % grid.x) + 0.5, f64::from(k / grid.x) + 0.5);
+            let pixel = cell * size / cells;
+            let a = world_from_screen.project_point3(pixel.extend(0.0));
+            let b = world_from_screen.project_point3(pixel.extend(1.0));
+            let (da, db) = (plane.signed_distance(a), plane.signed_distance(b));
+            if !(da * db <= 0.0 && da != db) {
+                return None;
+            }
+            let p = a + (b - a) * (da / (da - db));
+            inside(p).then_some((p, normal))
+        })
+        .collect()
 }

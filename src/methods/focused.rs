@@ -5,7 +5,7 @@
 //! the projection of the scene; lixel fits the map around `V ∩ R ∩ L`, whose
 //! projection lies inside that intersection, so the map is never larger.
 
-use crate::error::Result;
+use crate::error::{LixelError, Result};
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
 
@@ -18,7 +18,10 @@ pub(super) fn solve(problem: &ShadowProblem) -> Result<LightMatrix> {
 pub(super) fn solve_as(problem: &ShadowProblem, method: Method, fallback: Option<Fallback>) -> Result<LightMatrix> {
     let focus = problem.visible_receiver_body();
     if focus.is_empty() {
-        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible));
+        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible)).map_err(|e| match e {
+            LixelError::LightInsideFocus { .. } => LixelError::NothingVisible { method },
+            other => other,
+        });
     }
     let frame = problem.frame_towards(&focus);
     let axis = super::uniform_axis(problem, &frame, &focus, method)?;

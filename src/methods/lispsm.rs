@@ -18,7 +18,9 @@
 //! bound and the map tends to uniform; below
 //! [`Tolerances::lispsm_min_sin_gamma`](crate::Tolerances) lixel returns the
 //! focused (uniform) map with [`Fallback::LightAlongView`], as OGRE, Filament
-//! and OpenSceneGraph do.
+//! and OpenSceneGraph fall back to uniform. So that the switch is not a visible
+//! jump, `n` is additionally faded to infinity over
+//! `sin γ ∈ [s₀, fade_sin_gamma]` ([`LiSpsmOptions::fade_sin_gamma`]).
 //!
 //! Point and spot lights: the construction runs on the image plane of the
 //! light's uniform (focused) map, where the light is directional; the view
@@ -48,11 +50,16 @@ pub struct LiSpsmOptions {
     pub n_opt: NOpt,
     /// Multiplies `n_opt` (1 = the paper's optimum; larger is more uniform).
     pub n_scale: f64,
+    /// Below this `sin γ`, `n` is divided by `(sin γ - s₀) / (fade - s₀)`
+    /// (`s₀` = [`Tolerances::lispsm_min_sin_gamma`](crate::Tolerances)), so
+    /// the map reaches uniform continuously where the fallback takes over
+    /// instead of jumping to it. Default `0.02` (about 1.1°); `0` disables.
+    pub fade_sin_gamma: f64,
 }
 
 impl LiSpsmOptions {
     /// General `n_opt`, unscaled.
-    pub const DEFAULT: Self = Self { n_opt: NOpt::General, n_scale: 1.0 };
+    pub const DEFAULT: Self = Self { n_opt: NOpt::General, n_scale: 1.0, fade_sin_gamma: 0.02 };
 }
 
 impl Default for LiSpsmOptions {
@@ -77,9 +84,8 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
         Some(l) => (center - l).normalize(),
     };
     let sin_gamma = view.cross(ray).length();
-    let uniform = |sin_gamma| {
-        super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::LightAlongView { sin_gamma }))
-    };
+    let uniform =
+        |sin_gamma| super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::LightAlongView { sin_gamma }));
     if !(sin_gamma >= problem.tolerances().lispsm_min_sin_gamma) {
         return uniform(sin_gamma);
     }
@@ -113,6 +119,12 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
             d_world / ((z1 / z_n).sqrt() - 1.0)
         }
     } * options.n_scale.max(f64::MIN_POSITIVE);
+    let s0 = problem.tolerances().lispsm_min_sin_gamma;
+    let n_world = if sin_gamma < options.fade_sin_gamma && options.fade_sin_gamma > s0 {
+        n_world / ((sin_gamma - s0) / (options.fade_sin_gamma - s0))
+    } else {
+        n_world
+    };
     let n_image = n_world * d_image / d_world;
     if !n_image.is_finite() {
         return uniform(sin_gamma);

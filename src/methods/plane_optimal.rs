@@ -12,8 +12,9 @@
 //! Relevant points off the plane may land at or beyond this map's vanishing
 //! line. Then no single map keeps both perfect sampling and full coverage:
 //! lixel blends the axis towards the focused axis by the smallest weight that
-//! keeps every relevant point at least [`PlaneOptimalOptions::min_relative_w`]
-//! of its focused `w`, and reports [`Fallback::PlaneOptimalBlended`].
+//! keeps every relevant point's `w` at least
+//! [`PlaneOptimalOptions::min_relative_w`] times the smallest `w` of the
+//! visible plane, and reports [`Fallback::PlaneOptimalBlended`].
 
 use glam::{DMat3, DVec3};
 
@@ -28,15 +29,17 @@ pub struct PlaneOptimalOptions {
     /// The receiver plane. `None`: the horizontal plane at the bottom of the
     /// receiver bounds (the floor), `y = receivers.min.y`.
     pub plane: Option<Plane>,
-    /// Every relevant point must keep at least this fraction of the `w` it has
-    /// in the focused map (both axes unit length); below it the axis is
-    /// blended towards the focused one. In `(0, 1)`; default `0.25`.
+    /// Every relevant point must keep at least this fraction of the smallest
+    /// `w = j·X~` over the visible part of the plane (`X~` normalized for
+    /// point lights); otherwise points near the vanishing line would stretch
+    /// the map, and the axis is blended towards the focused one. In `(0, 1)`;
+    /// default `0.5`.
     pub min_relative_w: f64,
 }
 
 impl PlaneOptimalOptions {
-    /// The floor of the receiver bounds, `min_relative_w = 0.25`.
-    pub const DEFAULT: Self = Self { plane: None, min_relative_w: 0.25 };
+    /// The floor of the receiver bounds, `min_relative_w = 0.5`.
+    pub const DEFAULT: Self = Self { plane: None, min_relative_w: 0.5 };
 
     /// Optimal on `plane`.
     #[must_use]
@@ -76,24 +79,38 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
         return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate));
     };
 
-    // Smallest blend t with ((1-t) j_p + t j_f)·û ≥ β (j_f·û) for every
-    // relevant point; linear in t for each point, and t = 1 satisfies all.
-    let beta = options.min_relative_w;
-    let mut blend = 0.0_f64;
-    for &p in focus.vertices() {
-        let u = frame.homogeneous(p).normalize();
-        let (wp, wf) = (plane_axis.dot(u), focused_axis.dot(u));
-        let need = beta * wf;
-        if wp < need {
-            // wp + t (wf - wp) >= need  <=>  t >= (need - wp) / (wf - wp); wf > need > wp.
-            blend = blend.max((need - wp) / (wf - wp));
-        }
+    // The visible part of the plane (a thin slab of the focus body).
+    let slab = problem.eps() * 1e3;
+    let on_plane = focus.clip_all([grown(plane, slab), grown(plane.flipped(), slab)].iter(), problem.eps());
+    if on_plane.is_empty() {
+        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneNotVisible));
     }
-    let blend = blend.clamp(0.0, 1.0);
-    let (axis, fallback) = if blend > 0.0 {
-        (plane_axis * (1.0 - blend) + focused_axis * blend, Some(Fallback::PlaneOptimalBlended { blend }))
-    } else {
+    let beta = options.min_relative_w;
+    let directions = |body: &crate::geometry::ConvexPolyhedron| -> Vec<DVec3> {
+        body.vertices().iter().map(|&p| cosine_frame(&frame, frame.homogeneous(p))).collect()
+    };
+    let (plane_dirs, focus_dirs) = (directions(&on_plane), directions(&focus));
+    // Every relevant point must keep at least β times the smallest w of the
+    // visible plane: points near the vanishing line would blow the map up.
+    let acceptable = |axis: DVec3| {
+        let floor_w = plane_dirs.iter().map(|u| axis.dot(*u)).fold(f64::INFINITY, f64::min);
+        floor_w > 0.0 && focus_dirs.iter().all(|u| axis.dot(*u) >= beta * floor_w)
+    };
+    let blended = |t: f64| plane_axis * (1.0 - t) + focused_axis * t;
+    let (axis, fallback) = if acceptable(plane_axis) {
         (plane_axis, None)
+    } else {
+        // Bisection for the least blend towards the focused axis that is acceptable.
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if acceptable(blended(mid)) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        (blended(hi), Some(Fallback::PlaneOptimalBlended { blend: hi }))
     };
     problem.place(frame, axis, &focus, Method::PlaneOptimal, fallback)
 }
@@ -129,4 +146,20 @@ fn plane_optimal_axis(problem: &ShadowProblem, frame: &crate::LightFrame, plane:
         return None;
     }
     axis.try_normalize()
+}
+
+/// `X~` scaled for comparing `w` across points: unit length for point lights
+/// (a cosine to the axis), unchanged for directional lights (whose `X~` all
+/// have third coordinate 1).
+fn cosine_frame(frame: &crate::LightFrame, x: DVec3) -> DVec3 {
+    if frame.is_orthographic() {
+        x
+    } else {
+        x.normalize_or_zero()
+    }
+}
+
+/// `plane` with its kept half-space grown by `distance`.
+fn grown(plane: Plane, distance: f64) -> Plane {
+    Plane { normal: plane.normal, offset: plane.offset - distance }
 }

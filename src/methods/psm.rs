@@ -76,17 +76,10 @@ struct PostPerspective {
 
 fn post_perspective(problem: &ShadowProblem, options: &PsmOptions, hull: &ConvexPolyhedron) -> PostPerspective {
     let camera = problem.camera();
-    let near = options
-        .min_view_depth
-        .filter(|d| d.is_finite())
-        .map_or(camera.z_near(), |d| d.max(camera.z_near()));
+    let near = options.min_view_depth.filter(|d| d.is_finite()).map_or(camera.z_near(), |d| d.max(camera.z_near()));
     let view = camera.view_from_world();
     // Virtual shift: every vertex of H must be at least `near` in front.
-    let delta = hull
-        .vertices()
-        .iter()
-        .map(|&p| (view * p.extend(1.0)).z + near)
-        .fold(0.0_f64, f64::max);
+    let delta = hull.vertices().iter().map(|&p| (view * p.extend(1.0)).z + near).fold(0.0_f64, f64::max);
     let far = camera.z_far().max(near * (1.0 + 1e-6)) + delta;
     let shifted_view = DMat4::from_translation(DVec3::new(0.0, 0.0, -delta)) * view;
     // Keep the camera's x/y rows (asymmetric or jittered frusta included) and
@@ -127,8 +120,8 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions) -> Result<Lig
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
     // alone, and failing that use the focused map.
-    if let Some(matrix) = psm_axis(problem, options, &hull, &frame)
-        .and_then(|axis| place(problem, frame, axis, &hull, &focus, None).ok())
+    if let Some(matrix) =
+        psm_axis(problem, options, &hull, &frame).and_then(|axis| place(problem, frame, axis, &hull, &focus, None).ok())
     {
         return Ok(matrix);
     }
@@ -158,12 +151,16 @@ fn place(
         .filter(|&p| frame.homogeneous(p).length() > at_light || frame.is_orthographic())
         .collect();
     points.extend_from_slice(focus.vertices());
-    let casters = problem.caster_body(focus);
+    // Depth covers the casters of the visible receivers and all of `region`
+    // (for `H`, which holds casters itself, the light included when it lies
+    // in `S`: such a map needs unclipped depth).
+    let mut depth_points = problem.caster_body(focus).vertices().to_vec();
+    depth_points.extend_from_slice(region.vertices());
     crate::matrix::Placement {
         frame,
         axis,
         focus: &points,
-        depth_points: casters.vertices(),
+        depth_points: &depth_points,
         map: problem.map_size(),
         fit: problem.fit_options(),
         tolerances: problem.tolerances(),

@@ -1,0 +1,41 @@
+//! Every bug found by the property tests, with its raw input.
+
+mod common;
+
+use glam::{DVec3, UVec2};
+use lixel::{Aabb, Camera, Light, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
+
+/// PSM #3789 (seed 3): a point light inside the receiver box, so PSM's hull
+/// `H` reaches the light; the casters between `H`'s vertices and the light
+/// were outside the depth range because the depth row ignored `H` itself.
+#[test]
+fn psm_caster_next_to_light_stays_in_depth_range() {
+    let camera = Camera::look_at(
+        DVec3::new(-62.079816527295215, -12.650374634803192, 33.105967001644366),
+        DVec3::new(-71.89094185387096, -51.832058696276256, 33.18112862102762),
+        DVec3::Y,
+        2.0433665319445624,
+        UVec2::new(1262, 766),
+        6.296197821416158,
+        11627.3648529891,
+    )
+    .unwrap();
+    let light = Light::point(DVec3::new(15.612182393439724, -33.02944680365609, 33.12246259791413));
+    let bounds = SceneBounds {
+        casters: Aabb {
+            min: DVec3::new(-4.895975843070104, -39.02379507024628, 33.10641348487199),
+            max: DVec3::new(16.939401548568682, -6.427624259338344, 33.118090018378794),
+        },
+        receivers: Aabb {
+            min: DVec3::new(-74.06125003453307, -61.361028967025234, 33.02472659412257),
+            max: DVec3::new(26.67857240568508, -3.0949825150004546, 33.2147089754312),
+        },
+    };
+    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(3612)).unwrap();
+    let m = problem.solve(&Parameterization::Psm(Default::default())).unwrap();
+    let shadowed = DVec3::new(15.659738467986106, -33.07881789166541, 33.02472659412257);
+    let caster = DVec3::new(15.614560197167043, -33.03191535805656, 33.11757579772455);
+    let z = |p: DVec3| m.project(p).unwrap().z;
+    assert!(z(shadowed) >= 0.0 && z(shadowed) <= 1.0);
+    assert!(z(caster) >= 0.0 || m.needs_unclipped_depth, "caster depth {}", z(caster));
+}
