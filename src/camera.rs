@@ -39,20 +39,7 @@ impl Camera {
         z_far: f64,
     ) -> Result<Self> {
         check_finite(
-            &[
-                eye.x,
-                eye.y,
-                eye.z,
-                target.x,
-                target.y,
-                target.z,
-                up.x,
-                up.y,
-                up.z,
-                fov_y_radians,
-                z_near,
-                z_far,
-            ],
+            &[eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z, fov_y_radians, z_near, z_far],
             "camera parameters",
         )?;
         let dir = target - eye;
@@ -94,10 +81,8 @@ impl Camera {
             return Err(LixelError::DegenerateCamera { reason: "zero viewport" });
         }
         let rot = glam::DMat3::from_mat4(view_from_world);
-        let orthonormal = (rot.transpose() * rot - glam::DMat3::IDENTITY)
-            .to_cols_array()
-            .iter()
-            .all(|v| v.abs() < 1e-6);
+        let orthonormal =
+            (rot.transpose() * rot - glam::DMat3::IDENTITY).to_cols_array().iter().all(|v| v.abs() < 1e-6);
         if !orthonormal || rot.determinant() <= 0.0 || view_from_world.row(3) != DVec4::W {
             return Err(LixelError::DegenerateCamera { reason: "view_from_world is not a rigid transform" });
         }

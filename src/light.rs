@@ -159,9 +159,7 @@ impl LightFrame {
     /// `X~` of a homogeneous world point `(x, w)` (`w = 0`: a direction).
     #[must_use]
     pub fn homogeneous4(&self, world: DVec4) -> DVec3 {
-        self.light_from_world_3x4_rows()
-            .map(|row| row.dot(world))
-            .into()
+        self.light_from_world_3x4_rows().map(|row| row.dot(world)).into()
     }
 
     /// The 3x4 matrix `T` with `X~ = T [x; 1]`, as its three rows.
@@ -170,15 +168,9 @@ impl LightFrame {
         match *self {
             Self::Perspective { position, rotation } => {
                 let t = -(rotation * position);
-                [
-                    rotation.row(0).extend(t.x),
-                    rotation.row(1).extend(t.y),
-                    rotation.row(2).extend(t.z),
-                ]
+                [rotation.row(0).extend(t.x), rotation.row(1).extend(t.y), rotation.row(2).extend(t.z)]
             }
-            Self::Orthographic { rotation } => {
-                [rotation.row(0).extend(0.0), rotation.row(1).extend(0.0), DVec4::W]
-            }
+            Self::Orthographic { rotation } => [rotation.row(0).extend(0.0), rotation.row(1).extend(0.0), DVec4::W],
         }
     }
 
@@ -187,9 +179,7 @@ impl LightFrame {
     #[must_use]
     pub fn light_from_world(&self) -> DMat4 {
         match *self {
-            Self::Perspective { position, rotation } => {
-                DMat4::from_mat3(rotation) * DMat4::from_translation(-position)
-            }
+            Self::Perspective { position, rotation } => DMat4::from_mat3(rotation) * DMat4::from_translation(-position),
             Self::Orthographic { rotation } => DMat4::from_mat3(rotation),
         }
     }
