@@ -43,9 +43,11 @@ pub mod geometry;
 mod light;
 mod matrix;
 mod methods;
+pub mod optimize;
 mod problem;
 mod scene;
 pub mod score;
+pub mod synthetic;
 mod tolerance;
 
 pub use camera::Camera;
@@ -55,6 +57,7 @@ pub use matrix::{DepthRange, Fallback, LightMatrix, Method};
 pub use methods::{
     psm_light_case, LiSpsmOptions, NOpt, Parameterization, PlaneOptimalOptions, PsmLightCase, PsmOptions,
 };
+pub use optimize::{optimize_light_matrix, OptimizeOptions, OptimizeReport, Optimized, Optimizer, Samples};
 pub use problem::ShadowProblem;
 pub use scene::{Aabb, SceneBounds, ShadowMapSize};
 pub use tolerance::Tolerances;

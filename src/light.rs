@@ -184,6 +184,22 @@ impl LightFrame {
         }
     }
 
+    /// The `j` with `j · X~(x) = ρ · [x; 1]` for a world-space row `ρ` that
+    /// vanishes at the light (for example the `w` row of any light matrix of
+    /// this light): how an optical axis moves between frames.
+    #[must_use]
+    pub fn axis_from_world_row(&self, row: DVec4) -> DVec3 {
+        match *self {
+            // X~ = R (x - l): j·X~ = (Rᵀj)·x - (Rᵀj)·l, so Rᵀ j = ρ_xyz.
+            Self::Perspective { rotation, .. } => rotation * row.truncate(),
+            // X~ = (r1·x, r2·x, 1): j = (ρ_xyz·r1, ρ_xyz·r2, ρ_w).
+            Self::Orthographic { rotation } => {
+                let r = row.truncate();
+                DVec3::new(r.dot(rotation.row(0)), r.dot(rotation.row(1)), row.w)
+            }
+        }
+    }
+
     /// Whether this is a directional light's frame.
     #[must_use]
     pub fn is_orthographic(&self) -> bool {

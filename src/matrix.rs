@@ -194,6 +194,43 @@ pub(crate) fn project_to_image_plane(
     Ok((e1, e2))
 }
 
+/// What an affine fit for a candidate axis needs besides the axis and points.
+pub(crate) struct AxisFit<'a> {
+    pub frame: &'a LightFrame,
+    pub map: ShadowMapSize,
+    pub fit: &'a AffineFitOptions,
+    pub tolerances: &'a Tolerances,
+}
+
+/// The homography `G` (NDC units, unit `j`) for optical axis `axis` that fits
+/// the map around the light-coordinate points `xs`, or `None` when a point is
+/// not safely in front of the light (see [`Tolerances::min_front_cosine`]) or
+/// the fit fails. `scratch` is reused for the projected points.
+pub(crate) fn fit_homography(
+    setup: &AxisFit<'_>,
+    axis: DVec3,
+    xs: &[DVec3],
+    workspace: &mut FitWorkspace,
+    scratch: &mut Vec<DVec2>,
+) -> Option<DMat3> {
+    let j = axis.normalize();
+    if !j.is_finite() || xs.is_empty() {
+        return None;
+    }
+    let cos_min = setup.tolerances.min_front_cosine;
+    if setup.frame.is_orthographic() {
+        let max_w = xs.iter().map(|x| j.dot(*x)).fold(0.0, f64::max);
+        if !xs.iter().all(|x| j.dot(*x) > cos_min * max_w) {
+            return None;
+        }
+    } else if !xs.iter().all(|x| j.dot(*x) > cos_min * x.length()) {
+        return None;
+    }
+    let (e1, e2) = project_to_image_plane(j, xs.iter().copied(), scratch).ok()?;
+    let fit = workspace.fit(scratch, setup.map.width, setup.map.height, setup.fit).ok()?;
+    Some(fit.ndc_from_plane * DMat3::from_cols(e1, e2, j).transpose())
+}
+
 /// Everything needed to turn an optical axis into a [`LightMatrix`].
 pub(crate) struct Placement<'a> {
     pub frame: LightFrame,
@@ -218,41 +255,26 @@ impl Placement<'_> {
     /// the light for this axis; [`LixelError::UnusableSamples`] when there
     /// are no focus points.
     pub(crate) fn build(&self, workspace: &mut FitWorkspace) -> Result<LightMatrix> {
-        let j = self.axis.normalize();
-        if !j.is_finite() {
-            return Err(LixelError::NotInFront { method: self.method });
-        }
         let xs: Vec<DVec3> = self.focus.iter().map(|&p| self.frame.homogeneous(p)).collect();
         if xs.is_empty() {
             return Err(LixelError::UnusableSamples { reason: "no points to fit the map around" });
         }
-        // Every focus point must be safely in front of the light.
-        let max_w = xs.iter().map(|x| j.dot(*x)).fold(0.0, f64::max);
-        let cos_min = self.tolerances.min_front_cosine;
-        let safely_in_front = |x: &DVec3| {
-            let w = j.dot(*x);
-            if self.frame.is_orthographic() {
-                w > cos_min * max_w
-            } else {
-                w > cos_min * x.length()
-            }
-        };
-        if !xs.iter().all(safely_in_front) {
-            return Err(LixelError::NotInFront { method: self.method });
-        }
-        let mut plane_points = Vec::with_capacity(xs.len());
-        let (e1, e2) = project_to_image_plane(j, xs.iter().copied(), &mut plane_points)
-            .map_err(|_| LixelError::NotInFront { method: self.method })?;
-        let fit = workspace
-            .fit(&plane_points, self.map.width, self.map.height, self.fit)
-            .map_err(|_| LixelError::UnusableSamples { reason: "affine fit failed" })?;
-        let basis = DMat3::from_cols(e1, e2, j).transpose();
-        let homography = fit.ndc_from_plane * basis;
+        let mut scratch = Vec::with_capacity(xs.len());
+        let homography = fit_homography(
+            &AxisFit { frame: &self.frame, map: self.map, fit: self.fit, tolerances: self.tolerances },
+            self.axis,
+            &xs,
+            workspace,
+            &mut scratch,
+        )
+        .ok_or(LixelError::NotInFront { method: self.method })?;
         Ok(self.finish(homography, &xs))
     }
 
-    /// Adds the depth row to a homography whose third row is the unit axis.
-    fn finish(&self, homography: DMat3, focus_light: &[DVec3]) -> LightMatrix {
+    /// Adds the depth row to a homography whose third row is the unit axis;
+    /// `focus_light` are the focus points (or their extreme rays) in light
+    /// coordinates.
+    pub(crate) fn finish(&self, homography: DMat3, focus_light: &[DVec3]) -> LightMatrix {
         let j = homography.row(2);
         let t_rows = self.frame.light_from_world_3x4_rows();
         let g_row = |r: usize| -> DVec4 {

@@ -201,20 +201,6 @@ fn psm_axis(
     let a = cone.axis;
     let row_pps = (a * l.w).extend(-a.dot(l.truncate()));
     let row_world = pps.clip_from_world.transpose() * row_pps;
-    let axis = frame_axis_from_world_row(frame, row_world);
+    let axis = frame.axis_from_world_row(row_world);
     (axis.is_finite() && axis.length_squared() > 0.0).then_some(axis)
-}
-
-/// The `j` with `j · X~(x) = ρ · [x; 1]` for a world row `ρ` that vanishes at
-/// the light.
-pub(crate) fn frame_axis_from_world_row(frame: &LightFrame, row: DVec4) -> DVec3 {
-    match *frame {
-        // X~ = R (x - l): j·X~ = (Rᵀj)·x - (Rᵀj)·l, so Rᵀ j = ρ_xyz.
-        LightFrame::Perspective { rotation, .. } => rotation * row.truncate(),
-        // X~ = (r1·x, r2·x, 1): j = (ρ_xyz·r1, ρ_xyz·r2, ρ_w).
-        LightFrame::Orthographic { rotation } => {
-            let r = row.truncate();
-            DVec3::new(r.dot(rotation.row(0)), r.dot(rotation.row(1)), row.w)
-        }
-    }
 }

@@ -1,0 +1,344 @@
+//! Scene-optimized light matrices (Chong & Gortler 2006, "Scene Optimized
+//! Shadow Mapping"): from a low-resolution readback, choose the optical axis
+//! `j` that minimizes the summed badness of the shadow-boundary samples, with
+//! the minimum-area rectangle as the affine part.
+//!
+//! ```text
+//! readback ──Samples::from_readback──▶ Samples ──optimize_light_matrix──▶ Optimized { matrix, report }
+//! ```
+//!
+//! Engines call [`optimize_light_matrix`] (or keep an [`Optimizer`] to reuse
+//! its buffers) every few frames per light; [`ShadowScheduler`] keeps the
+//! per-light state and the paper's cadence.
+
+mod objective;
+mod samples;
+mod schedule;
+mod search;
+
+use glam::{DMat3, DVec2, DVec3};
+
+use crate::error::{LixelError, Result};
+use crate::fit::{AffineFitOptions, FitWorkspace};
+use crate::geometry::min_enclosing_cone;
+use crate::matrix::{fit_homography, AxisFit, Fallback, LightMatrix, Method, Placement};
+use crate::methods::Parameterization;
+
+pub use objective::{
+    objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
+    SampleGradient,
+};
+pub use samples::{Readback, SampleCounts, SampleOptions, Samples};
+pub use schedule::{AnalysisKind, FramePlan, ScheduleOptions, ShadowScheduler};
+
+/// The paper's rotation angles, in degrees (one negative for exploration).
+pub const PAPER_ANGLES_DEGREES: [f64; 9] = [-10.0, 3.0, 5.0, 9.0, 16.0, 23.0, 30.0, 40.0, 50.0];
+
+/// How the optical axis is searched.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum SearchStrategy {
+    /// The paper's heuristic: rotate `j` against the gradient by each of
+    /// [`OptimizeOptions::angles_degrees`], keep the best, repeat
+    /// [`OptimizeOptions::iterations`] times.
+    Paper,
+    /// argmin's Nelder–Mead over two angles of `j` (affine part re-fitted
+    /// inside the cost), for comparison with the heuristic.
+    NelderMead {
+        /// Iteration cap.
+        max_iterations: u64,
+    },
+}
+
+/// Which gradient steers the paper's rotation search.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GradientSource {
+    /// Central differences of the objective with the affine part re-fitted
+    /// for every `j` (four fits per iteration). The default: it is the
+    /// function the search actually compares.
+    Refit,
+    /// The closed-form gradient with the affine part held fixed on the image
+    /// plane ([`plane_frame_gradient`]). Cheaper, but it rewards zooming in
+    /// on the boundary samples at the expense of coverage, which the re-fit
+    /// then undoes: on lixel's walkthrough tests its direction often raises
+    /// the re-fitted objective.
+    Analytic,
+}
+
+/// Options of the optimizer, with the paper's defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OptimizeOptions {
+    /// Gradient iterations. Default 3.
+    pub iterations: usize,
+    /// Rotation angles tried per iteration, degrees. Default [`PAPER_ANGLES_DEGREES`].
+    pub angles_degrees: Vec<f64>,
+    /// Accept the new matrix only if its median badness is below this times
+    /// the previous matrix's (re-fitted to the current samples). Default 0.8.
+    pub accept_ratio: f64,
+    /// Grow the rectangle by this fraction of the map on each side (the
+    /// samples are sub-sampled). Default 0.01.
+    pub margin_fraction: f64,
+    /// The paper's shear heuristic for the affine part. Default off.
+    pub shear: bool,
+    /// Search strategy. Default [`SearchStrategy::Paper`].
+    pub strategy: SearchStrategy,
+    /// Gradient for [`SearchStrategy::Paper`]. Default [`GradientSource::Refit`].
+    pub gradient: GradientSource,
+}
+
+impl Default for OptimizeOptions {
+    fn default() -> Self {
+        Self {
+            iterations: 3,
+            angles_degrees: PAPER_ANGLES_DEGREES.to_vec(),
+            accept_ratio: 0.8,
+            margin_fraction: 0.01,
+            shear: false,
+            strategy: SearchStrategy::Paper,
+            gradient: GradientSource::Refit,
+        }
+    }
+}
+
+/// What the optimizer did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OptimizeReport {
+    /// The new matrix replaced the previous one (always true without one).
+    pub accepted: bool,
+    /// Objective `h` (summed badness) of the optimized matrix.
+    pub objective_new: f64,
+    /// Objective of the previous matrix re-fitted to the current samples.
+    pub objective_prev: Option<f64>,
+    /// Objective of the search's start (the better of focused and previous).
+    pub objective_start: f64,
+    /// Median badness of the optimized matrix over the boundary samples.
+    pub median_new: f64,
+    /// Median badness of the re-fitted previous matrix.
+    pub median_prev: Option<f64>,
+    /// Gradient iterations (or Nelder–Mead iterations) run.
+    pub iterations: usize,
+    /// Every rotation angle evaluated, degrees, in order.
+    pub angles_tried: Vec<f64>,
+    /// Boundary samples used.
+    pub boundary_samples: usize,
+    /// Relevant samples covered.
+    pub relevant_samples: usize,
+    /// Set when the focused matrix was returned instead.
+    pub fallback: Option<Fallback>,
+}
+
+/// The chosen matrix and the report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Optimized {
+    /// The matrix to render with: the optimized one if accepted, else the
+    /// previous one re-fitted to the current samples (or the focused one).
+    pub matrix: LightMatrix,
+    /// What happened.
+    pub report: OptimizeReport,
+}
+
+/// Scene-optimizes the light matrix for `samples`, given the previous frame's
+/// matrix (if any). See [`Optimizer::optimize`].
+///
+/// # Errors
+/// As [`Optimizer::optimize`].
+pub fn optimize_light_matrix(samples: &Samples, prev: Option<&LightMatrix>) -> Result<Optimized> {
+    Optimizer::new(OptimizeOptions::default()).optimize(samples, prev)
+}
+
+/// The optimizer with reusable buffers: repeated calls allocate nothing new
+/// once the buffers have grown to the largest sample set seen.
+#[derive(Clone, Debug)]
+pub struct Optimizer {
+    options: OptimizeOptions,
+    fit: FitWorkspace,
+    projected: Vec<DVec2>,
+    extreme: Vec<DVec3>,
+    badness: Vec<f64>,
+}
+
+/// A candidate axis with its fitted homography (NDC) and objective.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Candidate {
+    pub axis: DVec3,
+    pub homography: DMat3,
+    pub objective: f64,
+}
+
+impl Optimizer {
+    /// An optimizer with `options`.
+    #[must_use]
+    pub fn new(options: OptimizeOptions) -> Self {
+        Self { options, fit: FitWorkspace::default(), projected: Vec::new(), extreme: Vec::new(), badness: Vec::new() }
+    }
+
+    /// The options.
+    #[must_use]
+    pub fn options(&self) -> &OptimizeOptions {
+        &self.options
+    }
+
+    /// Scene-optimizes the light matrix for `samples`.
+    ///
+    /// 1. With no relevant or no boundary samples, returns the focused matrix
+    ///    with [`Fallback::NoUsableSamples`].
+    /// 2. Starts from the better (lower objective) of the focused axis and the
+    ///    previous matrix's axis, each re-fitted to the samples.
+    /// 3. Searches `j` (see [`SearchStrategy`]); every candidate's affine part
+    ///    is the minimum-area rectangle around the relevant samples, and a
+    ///    candidate that puts any relevant sample behind the light is skipped.
+    ///    The result's objective is never worse than the start's.
+    /// 4. Accepts the result over the previous matrix only if its median
+    ///    badness is below `accept_ratio` times the previous one's.
+    ///
+    /// # Errors
+    /// Only what computing the focused matrix reports (a point light inside
+    /// the visible receivers), or [`LixelError::UnusableSamples`] when the
+    /// relevant samples surround a point light.
+    pub fn optimize(&mut self, samples: &Samples, prev: Option<&LightMatrix>) -> Result<Optimized> {
+        let problem = &samples.problem;
+        let focused = problem.solve(&Parameterization::Focused)?;
+        let mut report = OptimizeReport {
+            boundary_samples: samples.boundary.len(),
+            relevant_samples: samples.relevant.len(),
+            ..OptimizeReport::default()
+        };
+        if samples.relevant.is_empty() || samples.boundary.is_empty() {
+            report.fallback = Some(Fallback::NoUsableSamples);
+            report.accepted = true;
+            let mut matrix = focused;
+            matrix.method = Method::SceneOptimized;
+            matrix.fallback = Some(Fallback::NoUsableSamples);
+            return Ok(Optimized { matrix, report });
+        }
+        self.find_extreme_rays(samples)?;
+        let frame = samples.frame;
+        let into_frame = |m: &LightMatrix| frame.axis_from_world_row(m.clip_from_world.row(3));
+        let start_focused = self.candidate(samples, into_frame(&focused));
+        let start_prev = prev.and_then(|m| self.candidate(samples, into_frame(m)));
+        let start = match (start_focused, start_prev) {
+            (Some(f), Some(p)) => {
+                if p.objective <= f.objective {
+                    p
+                } else {
+                    f
+                }
+            }
+            (Some(c), None) | (None, Some(c)) => c,
+            // Neither axis sees every relevant sample: use the narrowest cone.
+            (None, None) => {
+                let axis = self.cone_axis(samples)?;
+                self.candidate(samples, axis)
+                    .ok_or(LixelError::UnusableSamples { reason: "relevant samples surround the light" })?
+            }
+        };
+        report.objective_start = start.objective;
+        let best = match self.options.strategy {
+            SearchStrategy::Paper => search::paper(self, samples, start, &mut report),
+            SearchStrategy::NelderMead { max_iterations } => {
+                search::nelder_mead(self, samples, start, max_iterations, &mut report)
+            }
+        };
+        report.objective_new = best.objective;
+        report.median_new = self.median(samples, &best.homography);
+        let new_matrix = self.finish(samples, best.homography);
+        let Some(prev_candidate) = start_prev else {
+            report.accepted = true;
+            return Ok(Optimized { matrix: new_matrix, report });
+        };
+        let median_prev = self.median(samples, &prev_candidate.homography);
+        report.objective_prev = Some(prev_candidate.objective);
+        report.median_prev = Some(median_prev);
+        report.accepted = report.median_new < self.options.accept_ratio * median_prev;
+        let matrix = if report.accepted { new_matrix } else { self.finish(samples, prev_candidate.homography) };
+        Ok(Optimized { matrix, report })
+    }
+
+    /// The objective of optical axis `axis` (light coordinates of
+    /// [`Samples::frame`]) with its affine part fitted to `samples`; `None`
+    /// when a relevant sample would be behind the light.
+    ///
+    /// # Errors
+    /// [`LixelError::UnusableSamples`] when the samples have no extreme rays.
+    pub fn objective_for_axis(&mut self, samples: &Samples, axis: DVec3) -> Result<Option<f64>> {
+        self.find_extreme_rays(samples)?;
+        Ok(self.candidate(samples, axis).map(|c| c.objective))
+    }
+
+    /// The relevant samples' extreme rays: the vertices of their hull on one
+    /// image plane. Any axis that sees all of them sees every sample, and the
+    /// hull on its plane is the projection of these rays (math.md §4).
+    fn find_extreme_rays(&mut self, samples: &Samples) -> Result<()> {
+        let axis = self.cone_axis(samples)?;
+        let (e1, e2) = axis.any_orthonormal_pair();
+        self.projected.clear();
+        self.projected.extend(samples.relevant.iter().map(|x| DVec2::new(e1.dot(*x), e2.dot(*x)) / axis.dot(*x)));
+        let hull = crate::fit::convex_hull_2d(&self.projected);
+        self.extreme.clear();
+        // Unnormalized: for a directional light this restores X~ = (s, t, 1)
+        // exactly, which the depth row's `w_min` needs.
+        self.extreme.extend(hull.iter().map(|s| e1 * s.x + e2 * s.y + axis));
+        if self.extreme.is_empty() {
+            return Err(LixelError::UnusableSamples { reason: "no finite relevant sample" });
+        }
+        Ok(())
+    }
+
+    /// An axis in front of every relevant sample.
+    fn cone_axis(&self, samples: &Samples) -> Result<DVec3> {
+        if samples.frame.is_orthographic() {
+            return Ok(DVec3::Z);
+        }
+        min_enclosing_cone(&samples.relevant)
+            .filter(|c| c.cos_half_angle > samples.problem.tolerances().min_front_cosine)
+            .map(|c| c.axis)
+            .ok_or(LixelError::UnusableSamples { reason: "relevant samples surround the light" })
+    }
+
+    fn fit_options(&self, samples: &Samples) -> AffineFitOptions {
+        let map = samples.problem.map_size();
+        AffineFitOptions {
+            margin_texels: self.options.margin_fraction.max(0.0) * f64::from(map.width.max(map.height)),
+            shear: self.options.shear,
+            ..*samples.problem.fit_options()
+        }
+    }
+
+    /// Fits `axis` to the samples and scores it; `None` if a relevant sample
+    /// is not in front of the light.
+    pub(crate) fn candidate(&mut self, samples: &Samples, axis: DVec3) -> Option<Candidate> {
+        let fit = self.fit_options(samples);
+        let setup = AxisFit {
+            frame: &samples.frame,
+            map: samples.problem.map_size(),
+            fit: &fit,
+            tolerances: samples.problem.tolerances(),
+        };
+        let homography = fit_homography(&setup, axis, &self.extreme, &mut self.fit, &mut self.projected)?;
+        let texel = objective::texel_homography(&homography, samples.problem.map_size());
+        let value = objective::objective(&texel, &samples.boundary);
+        value.is_finite().then_some(Candidate { axis: homography.row(2), homography, objective: value })
+    }
+
+    fn median(&mut self, samples: &Samples, homography: &DMat3) -> f64 {
+        let texel = objective::texel_homography(homography, samples.problem.map_size());
+        objective::median_badness(&texel, &samples.boundary, &mut self.badness)
+    }
+
+    fn finish(&self, samples: &Samples, homography: DMat3) -> LightMatrix {
+        let problem = &samples.problem;
+        let fit = self.fit_options(samples);
+        Placement {
+            frame: samples.frame,
+            axis: homography.row(2),
+            focus: &[],
+            depth_points: &samples.depth_points,
+            map: problem.map_size(),
+            fit: &fit,
+            tolerances: problem.tolerances(),
+            method: Method::SceneOptimized,
+            fallback: None,
+        }
+        .finish(homography, &self.extreme)
+    }
+}

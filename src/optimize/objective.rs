@@ -1,0 +1,177 @@
+//! The scene-optimized objective (math.md §3) and its analytic gradient with
+//! respect to the optical axis `j`.
+//!
+//! A boundary sample carries its light coordinates `P = X~` (homogeneous, any
+//! positive scale) and their derivatives `D₁, D₂` along the visible surface
+//! with respect to full-resolution screen pixels. For `G = [g₁; g₂; j]` in
+//! texel units, with `w = j·P`, `aᵢ = gᵢ·P`, `cᵢⱼ = gᵢ·Dⱼ` and `eⱼ = j·Dⱼ`,
+//! the screen-to-texel Jacobian is
+//!
+//! ```text
+//! Jᵢⱼ = cᵢⱼ / w − aᵢ eⱼ / w²
+//! ```
+//!
+//! and the badness `b = ‖J⁻¹‖²_F = ‖J‖²_F / det(J)²`.
+
+use glam::{DMat2, DMat3, DVec2, DVec3};
+
+use crate::scene::ShadowMapSize;
+
+/// One boundary sample in light coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundarySample {
+    /// `X~` of the surface point (homogeneous; positive scale).
+    pub light: DVec3,
+    /// `∂X~/∂x₁` along the surface (full-resolution pixels).
+    pub d_dx: DVec3,
+    /// `∂X~/∂x₂` along the surface.
+    pub d_dy: DVec3,
+}
+
+/// `G` rescaled from NDC to texels (the translation does not affect `J`).
+#[must_use]
+pub(crate) fn texel_homography(g_ndc: &DMat3, map: ShadowMapSize) -> DMat3 {
+    let sx = 0.5 * f64::from(map.width);
+    let sy = 0.5 * f64::from(map.height);
+    DMat3::from_cols(g_ndc.row(0) * sx, g_ndc.row(1) * sy, g_ndc.row(2)).transpose()
+}
+
+struct Parts {
+    w: f64,
+    a: DVec2,
+    c: DMat2,
+    e: DVec2,
+    jac: DMat2,
+}
+
+#[inline]
+fn parts(g: &DMat3, s: &BoundarySample) -> Option<Parts> {
+    let (g1, g2, j) = (g.row(0), g.row(1), g.row(2));
+    let w = j.dot(s.light);
+    if !(w > 0.0) {
+        return None;
+    }
+    let a = DVec2::new(g1.dot(s.light), g2.dot(s.light));
+    // Column k of c and e: derivatives along screen axis k.
+    let c = DMat2::from_cols(DVec2::new(g1.dot(s.d_dx), g2.dot(s.d_dx)), DVec2::new(g1.dot(s.d_dy), g2.dot(s.d_dy)));
+    let e = DVec2::new(j.dot(s.d_dx), j.dot(s.d_dy));
+    let inv_w = 1.0 / w;
+    let jac =
+        DMat2::from_cols(c.x_axis * inv_w - a * (e.x * inv_w * inv_w), c.y_axis * inv_w - a * (e.y * inv_w * inv_w));
+    Some(Parts { w, a, c, e, jac })
+}
+
+/// Badness of one sample under `g` (texel units); `+∞` behind the light or
+/// where the light sees the surface edge-on.
+#[must_use]
+pub fn sample_badness(g: &DMat3, s: &BoundarySample) -> f64 {
+    parts(g, s).map_or(f64::INFINITY, |p| crate::score::badness_of_jacobian(&p.jac))
+}
+
+/// Badness of one sample and its gradient with respect to the rows of `g`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleGradient {
+    /// The badness `b`.
+    pub badness: f64,
+    /// `∂b/∂g₁`.
+    pub d_g1: DVec3,
+    /// `∂b/∂g₂`.
+    pub d_g2: DVec3,
+    /// `∂b/∂j` (affine rows fixed).
+    pub d_j: DVec3,
+}
+
+/// Badness of one sample and its gradient with respect to the three rows of
+/// `g` (texel units). `None` behind the light or edge-on.
+#[must_use]
+pub fn sample_badness_gradient(g: &DMat3, s: &BoundarySample) -> Option<SampleGradient> {
+    let p = parts(g, s)?;
+    let jac = p.jac;
+    let det = jac.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let frob = jac.x_axis.length_squared() + jac.y_axis.length_squared();
+    let b = frob / (det * det);
+    // ∂b/∂J = 2J/Δ² − 2F cof(J)/Δ³, cof(J) = ∂Δ/∂J = [[J₂₂, −J₂₁], [−J₁₂, J₁₁]].
+    let cof = DMat2::from_cols(DVec2::new(jac.y_axis.y, -jac.y_axis.x), DVec2::new(-jac.x_axis.y, jac.x_axis.x));
+    let db_dj = jac * (2.0 / (det * det)) - cof * (2.0 * frob / (det * det * det));
+    let (w, a, c, e) = (p.w, p.a, p.c, p.e);
+    let (w2, w3) = (w * w, w * w * w);
+    let d = [s.d_dx, s.d_dy];
+    // ∂Jᵢⱼ/∂w = −cᵢⱼ/w² + 2 aᵢ eⱼ / w³ ;  ∂Jᵢⱼ/∂eₖ = −aᵢ δⱼₖ / w²;
+    // ∂Jᵢⱼ/∂gᵢ = Dⱼ / w − P eⱼ / w².
+    let mut db_dw = 0.0;
+    let mut db_de = DVec2::ZERO;
+    let mut d_g = [DVec3::ZERO; 2];
+    for k in 0..2 {
+        let col_db = db_dj.col(k);
+        let col_c = c.col(k);
+        for i in 0..2 {
+            db_dw += col_db[i] * (-col_c[i] / w2 + 2.0 * a[i] * e[k] / w3);
+            db_de[k] += col_db[i] * (-a[i] / w2);
+            d_g[i] += (d[k] / w - s.light * (e[k] / w2)) * col_db[i];
+        }
+    }
+    let d_j = s.light * db_dw + s.d_dx * db_de.x + s.d_dy * db_de.y;
+    Some(SampleGradient { badness: b, d_g1: d_g[0], d_g2: d_g[1], d_j })
+}
+
+/// `h(G) = Σ b` over the samples (`+∞` when any sample is behind the light).
+#[must_use]
+pub fn objective(g: &DMat3, samples: &[BoundarySample]) -> f64 {
+    samples.iter().map(|s| sample_badness(g, s)).sum()
+}
+
+/// `h` and `∇_j h` with the affine rows `g₁, g₂` fixed; `None` when any
+/// sample is unusable.
+#[must_use]
+pub fn objective_gradient(g: &DMat3, samples: &[BoundarySample]) -> Option<(f64, DVec3)> {
+    let (h, _, _, d_j) = gradient_sums(g, samples)?;
+    Some((h, d_j))
+}
+
+fn gradient_sums(g: &DMat3, samples: &[BoundarySample]) -> Option<(f64, DVec3, DVec3, DVec3)> {
+    samples.iter().try_fold((0.0, DVec3::ZERO, DVec3::ZERO, DVec3::ZERO), |(h, g1, g2, j), s| {
+        let d = sample_badness_gradient(g, s)?;
+        Some((h + d.badness, g1 + d.d_g1, g2 + d.d_g2, j + d.d_j))
+    })
+}
+
+/// `h` and its gradient with respect to `j` when the affine part is held
+/// fixed *on the image plane*: `G = A [e₁; e₂; j]` with the plane's frame
+/// `e₁, e₂` carried along as `j` turns (parallel transport), so that turning
+/// `j` does not also translate and rescale the map the way a fixed `g₁, g₂`
+/// would. Only the part orthogonal to `j` is returned.
+///
+/// With `gᵢ = Aᵢ₁e₁ + Aᵢ₂e₂ + tᵢ j` and `deₖ = −(eₖ·dj) j`:
+/// `∇ = ∂h/∂j + Σᵢ [(gᵢ·j) ∂h/∂gᵢ − (∂h/∂gᵢ·j) gᵢ⊥]`, projected onto `j⊥`.
+#[must_use]
+pub fn plane_frame_gradient(g: &DMat3, samples: &[BoundarySample]) -> Option<(f64, DVec3)> {
+    let (h, d_g1, d_g2, d_j) = gradient_sums(g, samples)?;
+    let j = g.row(2).normalize();
+    let perp = |v: DVec3| v - j * v.dot(j);
+    let mut grad = d_j;
+    for (gi, d_gi) in [(g.row(0), d_g1), (g.row(1), d_g2)] {
+        grad += d_gi * gi.dot(j) - perp(gi) * d_gi.dot(j);
+    }
+    Some((h, perp(grad)))
+}
+
+/// Median badness over the samples (`+∞` for none), using `scratch`.
+#[must_use]
+pub(crate) fn median_badness(g: &DMat3, samples: &[BoundarySample], scratch: &mut Vec<f64>) -> f64 {
+    scratch.clear();
+    scratch.extend(samples.iter().map(|s| sample_badness(g, s)));
+    if scratch.is_empty() {
+        return f64::INFINITY;
+    }
+    let mid = scratch.len() / 2;
+    let (_, &mut upper, _) = scratch.select_nth_unstable_by(mid, f64::total_cmp);
+    if scratch.len() % 2 == 1 {
+        upper
+    } else {
+        let lower = scratch[..mid].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        0.5 * (lower + upper)
+    }
+}

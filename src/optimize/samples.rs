@@ -1,0 +1,397 @@
+//! Samples for the scene optimizer, from a read-back analysis pass or from
+//! plain world-space points.
+
+use glam::{DMat2, DVec3, DVec4};
+
+use crate::error::{LixelError, Result};
+use crate::light::{Light, LightFrame};
+use crate::optimize::objective::BoundarySample;
+use crate::problem::ShadowProblem;
+
+/// A low-resolution readback of the camera's analysis pass, as an engine
+/// reads it: row-major, row 0 at the top, covering the full viewport.
+#[derive(Clone, Copy, Debug)]
+pub struct Readback<'a> {
+    /// Width in pixels (of the readback, not the screen).
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Depth-buffer values in `[0, 1]`; `1` (the cleared far plane) means no geometry.
+    pub depth: &'a [f32],
+    /// Bit `i` set: the pixel is in light `i`'s shadow.
+    pub shadow_bits: &'a [u32],
+    /// Optional world-space normals (need not be unit length).
+    pub normals: Option<&'a [[f32; 3]]>,
+}
+
+/// How [`Samples::from_readback`] classifies pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleOptions {
+    /// A depth second difference above `curvature_ratio · |first difference|`
+    /// (plus [`depth_epsilon`](Self::depth_epsilon)) marks a depth
+    /// discontinuity: no reliable derivative there. Planes have zero second
+    /// difference (depth-buffer values are affine in screen space on a
+    /// plane). Default `0.5`.
+    pub curvature_ratio: f64,
+    /// Absolute slack on the second-difference test, in depth-buffer units.
+    /// Default `1e-6` (a few f32 ulps near 1).
+    pub depth_epsilon: f64,
+    /// A boundary receiver must face the light with at least this cosine.
+    /// Default `0.0`.
+    pub min_light_cosine: f64,
+}
+
+impl Default for SampleOptions {
+    fn default() -> Self {
+        Self { curvature_ratio: 0.5, depth_epsilon: 1e-6, min_light_cosine: 0.0 }
+    }
+}
+
+/// Counts from building [`Samples`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SampleCounts {
+    /// Pixels (or points) with geometry.
+    pub covered: usize,
+    /// Shadowed pixels.
+    pub shadowed: usize,
+    /// Pixels next to both shadowed and lit pixels.
+    pub boundary_candidates: usize,
+    /// Candidates dropped for a depth discontinuity or missing neighbours.
+    pub rejected_discontinuity: usize,
+    /// Candidates dropped because the receiver faces away from the light.
+    pub rejected_back_facing: usize,
+    /// Inputs dropped for non-finite values or positions behind the camera.
+    pub rejected_invalid: usize,
+}
+
+/// The samples of one light for [`optimize_light_matrix`](crate::optimize_light_matrix):
+/// *boundary* samples drive the objective, *relevant* samples (every
+/// shadowed pixel plus the boundary samples) must all be in the map.
+#[derive(Clone, Debug)]
+pub struct Samples {
+    pub(crate) problem: ShadowProblem,
+    pub(crate) frame: LightFrame,
+    pub(crate) boundary: Vec<BoundarySample>,
+    /// `X~` of every relevant sample.
+    pub(crate) relevant: Vec<DVec3>,
+    /// World points whose depth the map must cover: the visible receivers'
+    /// body and its casters, and every relevant sample.
+    pub(crate) depth_points: Vec<DVec3>,
+    pub(crate) counts: SampleCounts,
+}
+
+impl Samples {
+    fn empty(problem: &ShadowProblem) -> Self {
+        let focus = problem.visible_receiver_body();
+        let frame = problem.frame_towards(&focus);
+        let mut depth_points = problem.caster_body(&focus).vertices().to_vec();
+        depth_points.extend_from_slice(focus.vertices());
+        Self {
+            problem: problem.clone(),
+            frame,
+            boundary: Vec::new(),
+            relevant: Vec::new(),
+            depth_points,
+            counts: SampleCounts::default(),
+        }
+    }
+
+    /// The boundary samples (light coordinates and surface derivatives).
+    #[must_use]
+    pub fn boundary(&self) -> &[BoundarySample] {
+        &self.boundary
+    }
+
+    /// Number of relevant samples.
+    #[must_use]
+    pub fn relevant_count(&self) -> usize {
+        self.relevant.len()
+    }
+
+    /// What happened to the input.
+    #[must_use]
+    pub fn counts(&self) -> SampleCounts {
+        self.counts
+    }
+
+    /// The problem (camera, light, bounds, map size) the samples belong to.
+    #[must_use]
+    pub fn problem(&self) -> &ShadowProblem {
+        &self.problem
+    }
+
+    /// The light frame the samples are expressed in.
+    #[must_use]
+    pub fn frame(&self) -> &LightFrame {
+        &self.frame
+    }
+
+    /// Samples from world-space points: `relevant` must all be in the map;
+    /// `boundary` (point, surface normal) drive the objective and are
+    /// relevant too. Non-finite points, points behind the camera and boundary
+    /// points seen edge-on are dropped (counted in
+    /// [`SampleCounts::rejected_invalid`]); boundary points facing away from
+    /// the light are dropped from the objective but stay relevant.
+    #[must_use]
+    pub fn from_points(problem: &ShadowProblem, relevant: &[DVec3], boundary: &[(DVec3, DVec3)]) -> Self {
+        let mut samples = Self::empty(problem);
+        let camera = *problem.camera();
+        let screen = camera.screen_from_world();
+        let light = *problem.light();
+        for &p in relevant {
+            samples.push_relevant(p, &camera);
+        }
+        for &(p, n) in boundary {
+            if !samples.push_relevant(p, &camera) {
+                continue;
+            }
+            samples.counts.boundary_candidates += 1;
+            let Some(n) = n.try_normalize() else {
+                samples.counts.rejected_invalid += 1;
+                continue;
+            };
+            if !faces_light(&light, p, n, 0.0) {
+                samples.counts.rejected_back_facing += 1;
+                continue;
+            }
+            // d(pixel)/d(surface) in a tangent basis, inverted: d(surface)/d(pixel).
+            let (t1, t2) = n.any_orthonormal_pair();
+            let clip = screen * p.extend(1.0);
+            let px = glam::DVec2::new(clip.x, clip.y) / clip.w;
+            let column = |t: DVec3| {
+                let d = screen * t.extend(0.0);
+                (glam::DVec2::new(d.x, d.y) - px * d.w) / clip.w
+            };
+            let ds = DMat2::from_cols(column(t1), column(t2));
+            if !(ds.determinant().abs() > 0.0) {
+                samples.counts.rejected_invalid += 1;
+                continue;
+            }
+            let inv = ds.inverse();
+            let dp_dx = t1 * inv.x_axis.x + t2 * inv.x_axis.y;
+            let dp_dy = t1 * inv.y_axis.x + t2 * inv.y_axis.y;
+            let light_dir = |v: DVec3| samples.frame.homogeneous4(v.extend(0.0));
+            samples.boundary.push(BoundarySample {
+                light: samples.frame.homogeneous(p),
+                d_dx: light_dir(dp_dx),
+                d_dy: light_dir(dp_dy),
+            });
+        }
+        samples
+    }
+
+    /// Adds a relevant world point; `false` if it was rejected.
+    fn push_relevant(&mut self, p: DVec3, camera: &crate::Camera) -> bool {
+        self.counts.covered += 1;
+        if !p.is_finite() || camera.view_depth(p) <= 0.0 {
+            self.counts.rejected_invalid += 1;
+            return false;
+        }
+        let x = self.frame.homogeneous(p);
+        if x.length_squared() == 0.0 {
+            self.counts.rejected_invalid += 1;
+            return false;
+        }
+        self.relevant.push(x);
+        self.depth_points.push(p);
+        true
+    }
+
+    /// Samples of light `light_index` (bit in [`Readback::shadow_bits`]) from
+    /// a low-resolution readback of the camera view.
+    ///
+    /// Boundary samples: pixels whose 3x3 neighbourhood holds both shadowed
+    /// and lit pixels, on receivers facing the light, where the depth has a
+    /// reliable derivative (see [`SampleOptions`]); derivatives come from the
+    /// read-back normals when given, else from central differences of depth.
+    /// Relevant samples: every shadowed pixel plus the boundary samples.
+    ///
+    /// # Errors
+    /// [`LixelError::UnusableSamples`] when the buffer sizes do not match
+    /// `width x height` or `light_index >= 32`.
+    pub fn from_readback(
+        problem: &ShadowProblem,
+        readback: &Readback<'_>,
+        light_index: u32,
+        options: &SampleOptions,
+    ) -> Result<Self> {
+        let (w, h) = (readback.width as usize, readback.height as usize);
+        let n = w * h;
+        if readback.depth.len() != n
+            || readback.shadow_bits.len() != n
+            || readback.normals.is_some_and(|normals| normals.len() != n)
+        {
+            return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
+        }
+        if light_index >= 32 {
+            return Err(LixelError::UnusableSamples { reason: "light index must be below 32" });
+        }
+        let mut samples = Self::empty(problem);
+        if n == 0 {
+            return Ok(samples);
+        }
+        let camera = *problem.camera();
+        let light = *problem.light();
+        let world_from_screen = camera.screen_from_world().inverse();
+        let viewport = camera.viewport().as_dvec2();
+        // Full-resolution pixels per readback pixel.
+        let step = glam::DVec2::new(viewport.x / w as f64, viewport.y / h as f64);
+        let bit = 1u32 << light_index;
+        let depth_at = |x: usize, y: usize| -> Option<f64> {
+            let d = f64::from(readback.depth[y * w + x]);
+            (d.is_finite() && (0.0..1.0).contains(&d)).then_some(d)
+        };
+        let shadowed_at = |x: usize, y: usize| readback.shadow_bits[y * w + x] & bit != 0;
+        // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
+        let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
+            let v = world_from_screen * DVec4::new(sx, sy, d, 1.0);
+            if v.w < 0.0 {
+                -v
+            } else {
+                v
+            }
+        };
+        for y in 0..h {
+            for x in 0..w {
+                let Some(d) = depth_at(x, y) else { continue };
+                samples.counts.covered += 1;
+                let sx = (x as f64 + 0.5) * step.x;
+                let sy = (y as f64 + 0.5) * step.y;
+                let here = unproject(sx, sy, d);
+                if !(here.w > 0.0) || !here.is_finite() {
+                    samples.counts.rejected_invalid += 1;
+                    continue;
+                }
+                let world = here.truncate() / here.w;
+                let shadowed = shadowed_at(x, y);
+                let mut mixed = false;
+                for (nx, ny) in neighbours(x, y, w, h) {
+                    if depth_at(nx, ny).is_some() && shadowed_at(nx, ny) != shadowed {
+                        mixed = true;
+                        break;
+                    }
+                }
+                if shadowed {
+                    samples.counts.shadowed += 1;
+                }
+                if !shadowed && !mixed {
+                    continue;
+                }
+                let x_light = samples.frame.homogeneous4(here);
+                samples.relevant.push(x_light);
+                samples.depth_points.push(world);
+                if !mixed {
+                    continue;
+                }
+                samples.counts.boundary_candidates += 1;
+                // Depth slope along each screen axis (full-resolution units).
+                let slope = |dx: isize, dy: isize| -> Option<f64> {
+                    let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
+                    let (x1, y1) = (x + dx as usize, y + dy as usize);
+                    if x1 >= w || y1 >= h {
+                        return None;
+                    }
+                    let (d0, d1) = (depth_at(x0, y0)?, depth_at(x1, y1)?);
+                    let first = 0.5 * (d1 - d0);
+                    let second = d1 - 2.0 * d + d0;
+                    (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
+                        .then_some(first / if dx != 0 { step.x } else { step.y })
+                };
+                let normal_given = readback.normals.map(|normals| {
+                    let [nx, ny, nz] = normals[y * w + x];
+                    DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
+                });
+                let frame = samples.frame;
+                let (sample, normal) = match normal_given.and_then(DVec3::try_normalize) {
+                    Some(normal) => {
+                        // Derivatives of the surface point along the tangent plane.
+                        let Some((tx, ty)) = plane_derivatives(&world_from_screen, sx, sy, world, normal) else {
+                            samples.counts.rejected_discontinuity += 1;
+                            continue;
+                        };
+                        let along = |t: DVec3| frame.homogeneous4(t.extend(0.0));
+                        let sample =
+                            BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) };
+                        (sample, normal)
+                    }
+                    None => {
+                        let (Some(zx), Some(zy)) = (slope(1, 0), slope(0, 1)) else {
+                            samples.counts.rejected_discontinuity += 1;
+                            continue;
+                        };
+                        let dx4 = world_from_screen * DVec4::new(1.0, 0.0, zx, 0.0);
+                        let dy4 = world_from_screen * DVec4::new(0.0, 1.0, zy, 0.0);
+                        let (dx4, dy4) = if here.w < 0.0 { (-dx4, -dy4) } else { (dx4, dy4) };
+                        // World tangents (derivative of the dehomogenised point).
+                        let tx = (dx4.truncate() - world * dx4.w) / here.w;
+                        let ty = (dy4.truncate() - world * dy4.w) / here.w;
+                        let mut normal = tx.cross(ty).normalize_or_zero();
+                        if normal.dot(camera.eye() - world) < 0.0 {
+                            normal = -normal;
+                        }
+                        // Homogeneous point and its homogeneous derivatives: one scale.
+                        let sample = BoundarySample {
+                            light: x_light,
+                            d_dx: frame.homogeneous4(dx4),
+                            d_dy: frame.homogeneous4(dy4),
+                        };
+                        (sample, normal)
+                    }
+                };
+                if !faces_light(&light, world, normal, options.min_light_cosine) {
+                    samples.counts.rejected_back_facing += 1;
+                    continue;
+                }
+                samples.boundary.push(sample);
+            }
+        }
+        Ok(samples)
+    }
+}
+
+/// The 8 neighbours of a pixel inside a `w x h` grid.
+fn neighbours(x: usize, y: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
+    (-1isize..=1).flat_map(move |dy| {
+        (-1isize..=1).filter_map(move |dx| {
+            if dx == 0 && dy == 0 {
+                return None;
+            }
+            let nx = x.checked_add_signed(dx).filter(|&v| v < w)?;
+            let ny = y.checked_add_signed(dy).filter(|&v| v < h)?;
+            Some((nx, ny))
+        })
+    })
+}
+
+/// World-space derivatives, per full-resolution pixel along x and y, of the
+/// point where the pixel's ray meets the plane through `world` with `normal`.
+fn plane_derivatives(
+    world_from_screen: &glam::DMat4,
+    sx: f64,
+    sy: f64,
+    world: DVec3,
+    normal: DVec3,
+) -> Option<(DVec3, DVec3)> {
+    // Move one pixel along x (or y) and intersect that pixel's ray with the plane.
+    let hit = |px: f64, py: f64| -> Option<DVec3> {
+        let a = world_from_screen.project_point3(DVec3::new(px, py, 0.0));
+        let b = world_from_screen.project_point3(DVec3::new(px, py, 1.0));
+        let denom = normal.dot(b - a);
+        if denom.abs() <= f64::EPSILON * (b - a).length() {
+            return None;
+        }
+        Some(a + (b - a) * (normal.dot(world - a) / denom))
+    };
+    let (xp, xm) = (hit(sx + 0.5, sy)?, hit(sx - 0.5, sy)?);
+    let (yp, ym) = (hit(sx, sy + 0.5)?, hit(sx, sy - 0.5)?);
+    Some((xp - xm, yp - ym)).filter(|(a, b)| a.is_finite() && b.is_finite())
+}
+
+/// Whether a receiver at `p` with unit normal `n` faces the light.
+fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) -> bool {
+    let to_light = match *light {
+        Light::Directional { direction } => -direction,
+        Light::Point { position } | Light::Spot { position, .. } => (position - p).normalize_or_zero(),
+    };
+    n.dot(to_light) > min_cosine
+}
