@@ -290,13 +290,16 @@ fn optimized_beats_focused_and_lispsm_on_a_walkthrough() {
     assert!(beats_both * 2 > total, "optimized beat both in only {beats_both} of {total}");
 }
 
+/// A named adversarial input: relevant points and (point, normal) boundary points.
+type Case = (&'static str, Vec<DVec3>, Vec<(DVec3, DVec3)>);
+
 #[test]
 fn adversarial_sample_sets_fall_back_or_stay_correct() {
     let (problem, _) = walkthrough_problem(Light::directional(DVec3::new(0.3, -1.0, 0.2)));
     let ahead = DVec3::new(0.0, 0.0, -5.0);
     let up = DVec3::Y;
     let behind_light = DVec3::new(-300.0, 1000.0, -200.0);
-    let cases: Vec<(&str, Vec<DVec3>, Vec<(DVec3, DVec3)>)> = vec![
+    let cases: Vec<Case> = vec![
         ("empty", vec![], vec![]),
         ("one point", vec![ahead], vec![(ahead, up)]),
         (

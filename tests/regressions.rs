@@ -39,3 +39,31 @@ fn psm_caster_next_to_light_stays_in_depth_range() {
     assert!(z(shadowed) >= 0.0 && z(shadowed) <= 1.0);
     assert!(z(caster) >= 0.0 || m.needs_unclipped_depth, "caster depth {}", z(caster));
 }
+
+/// Plane-optimal #4230 (seed 6): a distant point light barely below the
+/// floor's plane makes the floor's own `w` tiny; the blend accepted an axis
+/// closer to the vanishing line than the matrix builder allows, which then
+/// reported `NotInFront`.
+#[test]
+fn plane_optimal_with_light_grazing_the_plane_is_accepted_by_the_builder() {
+    let camera = Camera::look_at(
+        DVec3::new(-63.20899153815092, 2.615369400877717, 11.991133692752413),
+        DVec3::new(-95.71359402578547, 2.4866832235505827, 71.87797370615722),
+        DVec3::Y,
+        1.8359691318505027,
+        UVec2::new(1438, 415),
+        1.5166986415034587,
+        22327.624005166872,
+    )
+    .unwrap();
+    let light = Light::point(DVec3::new(-1672.1430658868596, -3.7544231747451384, 2976.3091111020076));
+    let b = Aabb {
+        min: DVec3::new(-68.13955789262589, 0.0, -68.13955789262589),
+        max: DVec3::new(68.13955789262589, 9.31226212554883, 68.13955789262589),
+    };
+    let problem = ShadowProblem::new(camera, light, SceneBounds::uniform(b), ShadowMapSize::new(1086, 8)).unwrap();
+    let m = problem.solve(&Parameterization::PlaneOptimal(Default::default())).unwrap();
+    for p in problem.visible_receiver_body().vertices() {
+        assert!(m.covers(*p, 1e-6), "{p} not covered");
+    }
+}

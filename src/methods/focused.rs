@@ -27,3 +27,18 @@ pub(super) fn solve_as(problem: &ShadowProblem, method: Method, fallback: Option
     let axis = super::uniform_axis(problem, &frame, &focus, method)?;
     problem.place(frame, axis, &focus, method, fallback)
 }
+
+/// The focused matrix from the visible receiver body and its casters,
+/// already computed (the scene optimizer shares them).
+pub(crate) fn from_bodies(
+    problem: &ShadowProblem,
+    focus: &crate::geometry::ConvexPolyhedron,
+    casters: &crate::geometry::ConvexPolyhedron,
+) -> Result<LightMatrix> {
+    if focus.is_empty() {
+        return solve(problem);
+    }
+    let frame = problem.frame_towards(focus);
+    let axis = super::uniform_axis(problem, &frame, focus, Method::Focused)?;
+    problem.place_with_casters(frame, axis, focus, casters, Method::Focused, None)
+}

@@ -2,7 +2,7 @@
 //! they choose the optical axis `j` and the region the map must hold; the
 //! affine fit and the depth row are shared (see [`crate::matrix`]).
 
-mod focused;
+pub(crate) mod focused;
 mod lispsm;
 mod normal;
 mod plane_optimal;

@@ -92,9 +92,13 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
     let (plane_dirs, focus_dirs) = (directions(&on_plane), directions(&focus));
     // Every relevant point must keep at least β times the smallest w of the
     // visible plane: points near the vanishing line would blow the map up.
+    // Never closer to the vanishing line than the matrix builder accepts.
+    let front = 2.0 * problem.tolerances().min_front_cosine;
     let acceptable = |axis: DVec3| {
         let floor_w = plane_dirs.iter().map(|u| axis.dot(*u)).fold(f64::INFINITY, f64::min);
-        floor_w > 0.0 && focus_dirs.iter().all(|u| axis.dot(*u) >= beta * floor_w)
+        let max_w = focus_dirs.iter().map(|u| axis.dot(*u)).fold(0.0, f64::max);
+        let least = (beta * floor_w).max(if frame.is_orthographic() { front * max_w } else { front });
+        floor_w > 0.0 && focus_dirs.iter().all(|u| axis.dot(*u) >= least)
     };
     let blended = |t: f64| plane_axis * (1.0 - t) + focused_axis * t;
     let (axis, fallback) = if acceptable(plane_axis) {

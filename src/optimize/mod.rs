@@ -22,7 +22,6 @@ use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::min_enclosing_cone;
 use crate::matrix::{fit_homography, AxisFit, Fallback, LightMatrix, Method, Placement};
-use crate::methods::Parameterization;
 
 pub use objective::{
     objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
@@ -196,8 +195,7 @@ impl Optimizer {
     /// the visible receivers), or [`LixelError::UnusableSamples`] when the
     /// relevant samples surround a point light.
     pub fn optimize(&mut self, samples: &Samples, prev: Option<&LightMatrix>) -> Result<Optimized> {
-        let problem = &samples.problem;
-        let focused = problem.solve(&Parameterization::Focused)?;
+        let focused = samples.focused.clone()?;
         let mut report = OptimizeReport {
             boundary_samples: samples.boundary.len(),
             relevant_samples: samples.relevant.len(),

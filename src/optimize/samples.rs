@@ -5,6 +5,7 @@ use glam::{DMat2, DVec3, DVec4};
 
 use crate::error::{LixelError, Result};
 use crate::light::{Light, LightFrame};
+use crate::matrix::LightMatrix;
 use crate::optimize::objective::BoundarySample;
 use crate::problem::ShadowProblem;
 
@@ -70,6 +71,8 @@ pub struct SampleCounts {
 #[derive(Clone, Debug)]
 pub struct Samples {
     pub(crate) problem: ShadowProblem,
+    /// The focused matrix (the optimizer's fallback and a starting point).
+    pub(crate) focused: Result<LightMatrix>,
     pub(crate) frame: LightFrame,
     pub(crate) boundary: Vec<BoundarySample>,
     /// `X~` of every relevant sample.
@@ -84,10 +87,13 @@ impl Samples {
     fn empty(problem: &ShadowProblem) -> Self {
         let focus = problem.visible_receiver_body();
         let frame = problem.frame_towards(&focus);
-        let mut depth_points = problem.caster_body(&focus).vertices().to_vec();
+        let casters = problem.caster_body(&focus);
+        let focused = crate::methods::focused::from_bodies(problem, &focus, &casters);
+        let mut depth_points = casters.vertices().to_vec();
         depth_points.extend_from_slice(focus.vertices());
         Self {
             problem: problem.clone(),
+            focused,
             frame,
             boundary: Vec::new(),
             relevant: Vec::new(),
@@ -241,7 +247,6 @@ impl Samples {
             let d = f64::from(readback.depth[y * w + x]);
             (d.is_finite() && (0.0..1.0).contains(&d)).then_some(d)
         };
-        let shadowed_at = |x: usize, y: usize| readback.shadow_bits[y * w + x] & bit != 0;
         // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
         let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
             let v = world_from_screen * DVec4::new(sx, sy, d, 1.0);
@@ -251,10 +256,51 @@ impl Samples {
                 v
             }
         };
+        // Per pixel: 1 shadowed, 2 lit, 0 no geometry; then the OR of that
+        // over the 3x3 neighbourhood (separable), so 3 marks a shadow boundary.
+        let class: Vec<u8> = readback
+            .depth
+            .iter()
+            .zip(readback.shadow_bits)
+            .map(|(&d, &bits)| match (d.is_finite() && (0.0..1.0).contains(&d), bits & bit != 0) {
+                (false, _) => 0,
+                (true, true) => 1,
+                (true, false) => 2,
+            })
+            .collect();
+        let mut across = vec![0u8; n];
+        for (src, dst) in class.chunks_exact(w).zip(across.chunks_exact_mut(w)) {
+            for x in 0..w {
+                dst[x] = src[x.saturating_sub(1)] | src[x] | src[(x + 1).min(w - 1)];
+            }
+        }
+        let mut near = vec![0u8; n];
+        for y in 0..h {
+            let (above, here, below) = (
+                &across[y.saturating_sub(1) * w..][..w],
+                &across[y * w..][..w],
+                &across[(y + 1).min(h - 1) * w..][..w],
+            );
+            for (x, cell) in near[y * w..][..w].iter_mut().enumerate() {
+                *cell = above[x] | here[x] | below[x];
+            }
+        }
         for y in 0..h {
             for x in 0..w {
-                let Some(d) = depth_at(x, y) else { continue };
+                let class_here = class[y * w + x];
+                if class_here == 0 {
+                    continue;
+                }
                 samples.counts.covered += 1;
+                let shadowed = class_here == 1;
+                let mixed = near[y * w + x] == 3;
+                if shadowed {
+                    samples.counts.shadowed += 1;
+                }
+                if !shadowed && !mixed {
+                    continue;
+                }
+                let d = f64::from(readback.depth[y * w + x]);
                 let sx = (x as f64 + 0.5) * step.x;
                 let sy = (y as f64 + 0.5) * step.y;
                 let here = unproject(sx, sy, d);
@@ -263,20 +309,6 @@ impl Samples {
                     continue;
                 }
                 let world = here.truncate() / here.w;
-                let shadowed = shadowed_at(x, y);
-                let mut mixed = false;
-                for (nx, ny) in neighbours(x, y, w, h) {
-                    if depth_at(nx, ny).is_some() && shadowed_at(nx, ny) != shadowed {
-                        mixed = true;
-                        break;
-                    }
-                }
-                if shadowed {
-                    samples.counts.shadowed += 1;
-                }
-                if !shadowed && !mixed {
-                    continue;
-                }
                 let x_light = samples.frame.homogeneous4(here);
                 samples.relevant.push(x_light);
                 samples.depth_points.push(world);
@@ -347,20 +379,6 @@ impl Samples {
         }
         Ok(samples)
     }
-}
-
-/// The 8 neighbours of a pixel inside a `w x h` grid.
-fn neighbours(x: usize, y: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
-    (-1isize..=1).flat_map(move |dy| {
-        (-1isize..=1).filter_map(move |dx| {
-            if dx == 0 && dy == 0 {
-                return None;
-            }
-            let nx = x.checked_add_signed(dx).filter(|&v| v < w)?;
-            let ny = y.checked_add_signed(dy).filter(|&v| v < h)?;
-            Some((nx, ny))
-        })
-    })
 }
 
 /// World-space derivatives, per full-resolution pixel along x and y, of the
