@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use glam::{DVec3, UVec2};
+use lixel::synthetic::{Sphere, SyntheticReadback, SyntheticScene};
 use lixel::{Aabb, Camera, Light, SceneBounds, ShadowMapSize, ShadowProblem};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -144,4 +145,32 @@ pub fn config(seed: u64, index: usize) -> Config {
         _ => Light::directional(unit(&mut rng)),
     };
     Config { eye, target, up, fov_y, viewport, z_near, z_far, light, bounds, map }
+}
+
+/// A small synthetic scene (floor, two spheres, a box) in front of a fixed
+/// camera, one problem per light, and its 96x96 readback.
+pub fn setup(lights: &[Light]) -> (Vec<ShadowProblem>, SyntheticReadback) {
+    let scene = SyntheticScene {
+        floor: Some((0.0, 20.0)),
+        spheres: vec![
+            Sphere { center: DVec3::new(0.0, 1.0, -5.0), radius: 1.0 },
+            Sphere { center: DVec3::new(3.0, 2.0, -9.0), radius: 1.5 },
+        ],
+        boxes: vec![Aabb::from_corners(DVec3::new(-4.0, 0.0, -8.0), DVec3::new(-2.0, 3.0, -6.0))],
+    };
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 1.7, 4.0),
+        DVec3::new(0.0, 0.5, -6.0),
+        DVec3::Y,
+        60f64.to_radians(),
+        UVec2::new(800, 800),
+        0.1,
+        60.0,
+    )
+    .unwrap();
+    let problems = lights
+        .iter()
+        .map(|&l| ShadowProblem::new(camera, l, scene.bounds().unwrap(), ShadowMapSize::square(512)).unwrap())
+        .collect();
+    (problems, scene.render(&camera, lights, 96, 96))
 }
