@@ -3,7 +3,7 @@
 mod common;
 
 use glam::{DVec3, UVec2};
-use lixel::{Aabb, Camera, Light, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
+use lixel::{Aabb, Camera, Light, LixelError, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
 
 /// PSM #3789 (seed 3): a point light inside the receiver box, so PSM's hull
 /// `H` reaches the light; the casters between `H`'s vertices and the light
@@ -65,5 +65,44 @@ fn plane_optimal_with_light_grazing_the_plane_is_accepted_by_the_builder() {
     let m = problem.solve(&Parameterization::PlaneOptimal(Default::default())).unwrap();
     for p in problem.visible_receiver_body().vertices() {
         assert!(m.covers(*p, 1e-6), "{p} not covered");
+    }
+}
+
+/// Focused #6 (seed 2): the view frustum (far = 13) sees no receiver, and the
+/// point light sits inside the receiver box, so the normal-map fallback is
+/// impossible too. This used to surface as `LightInsideFocus`, which blamed
+/// the light for what is really "nothing visible"; it is now `NothingVisible`.
+#[test]
+fn nothing_visible_with_light_inside_receivers_is_its_own_error() {
+    let camera = Camera::look_at(
+        DVec3::new(-168.8696199214554, 250.16583992741215, 154.07481864950273),
+        DVec3::new(-57.62237208056687, 51.91048605980892, -32.75767063457019),
+        DVec3::Y,
+        1.4480275498614061,
+        UVec2::new(410, 1547),
+        0.28431332020716193,
+        13.255336602234225,
+    )
+    .unwrap();
+    let light = Light::point(DVec3::new(-47.98522848833273, 44.26400657801584, -25.392214449411494));
+    let bounds = SceneBounds {
+        casters: Aabb {
+            min: DVec3::new(-51.43397199657864, 45.968724417854844, -48.33958758539766),
+            max: DVec3::new(-46.941228724517, 57.15117069068273, -38.80427576800658),
+        },
+        receivers: Aabb {
+            min: DVec3::new(-58.393568078676616, 42.372860387502094, -48.540306388866306),
+            max: DVec3::new(-40.37237052947377, 60.47806545159298, -23.28270089286162),
+        },
+    };
+    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::new(44, 1142)).unwrap();
+    assert!(problem.visible_receiver_body().is_empty());
+    for p in Parameterization::ALL_DEFAULT.into_iter().skip(1) {
+        assert!(
+            matches!(problem.solve(&p), Err(LixelError::NothingVisible { .. })),
+            "{:?}: {:?}",
+            p.method(),
+            problem.solve(&p)
+        );
     }
 }
