@@ -181,12 +181,16 @@ impl Camera {
     /// bit 0 selects NDC `x = +1`, bit 1 `y = +1`, bit 2 the far plane.
     #[must_use]
     pub fn frustum_corners(&self) -> [DVec3; 8] {
-        let world_from_clip = self.clip_from_world().inverse();
+        // Unproject in view space first, then apply the rigid inverse: going
+        // through the inverse of the full clip_from_world loses about
+        // ε·far/near of accuracy at extreme depth ranges.
+        let view_from_clip = self.clip_from_view.inverse();
+        let world_from_view = self.view_from_world.inverse();
         std::array::from_fn(|i| {
             let x = if i & 1 == 0 { -1.0 } else { 1.0 };
             let y = if i & 2 == 0 { -1.0 } else { 1.0 };
             let z = if i & 4 == 0 { 0.0 } else { 1.0 };
-            world_from_clip.project_point3(DVec3::new(x, y, z))
+            world_from_view.transform_point3(view_from_clip.project_point3(DVec3::new(x, y, z)))
         })
     }
 }

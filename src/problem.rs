@@ -1,7 +1,7 @@
 //! [`ShadowProblem`]: one validated camera, light, scene and map size, and the
 //! convex bodies every method builds on.
 
-use glam::{DVec3, DVec4};
+use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::error::Result;
@@ -150,8 +150,8 @@ impl ShadowProblem {
     pub fn view_planes(&self) -> Vec<Plane> {
         let m = self.camera.clip_from_world();
         let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
-        // Inside: h·[x; 1] >= 0 for each of these.
-        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].into_iter().filter_map(plane_from_inside_halfspace).collect()
+        // Inside: h·[x; 1] >= 0 for each of these (a Plane keeps the other sign).
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].into_iter().filter_map(|h| Plane::from_homogeneous(-h)).collect()
     }
 
     /// The view frustum `V` as a polyhedron (may be huge for a far far plane).
@@ -202,7 +202,11 @@ impl ShadowProblem {
     /// extruded towards the light).
     #[must_use]
     pub fn psm_hull(&self) -> ConvexPolyhedron {
-        let planes = self.towards_light_planes(&self.view_body());
+        let view = self.view_body();
+        if view.is_empty() {
+            return ConvexPolyhedron::empty();
+        }
+        let planes = self.towards_light_planes(&view);
         self.box_in_light(&self.bounds.scene()).clip_all(planes.iter(), self.eps())
     }
 
@@ -282,11 +286,4 @@ impl ShadowProblem {
         }
         .build(&mut FitWorkspace::default())
     }
-}
-
-/// The plane `{x : h·[x; 1] = 0}` with `h·[x; 1] >= 0` as the kept side.
-fn plane_from_inside_halfspace(h: DVec4) -> Option<Plane> {
-    let n = h.truncate();
-    let len = n.length();
-    (len > 0.0 && len.is_finite() && h.w.is_finite()).then(|| Plane { normal: -n / len, offset: -h.w / len })
 }
