@@ -151,7 +151,10 @@ impl ShadowProblem {
         let m = self.camera.clip_from_world();
         let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
         // Inside: h·[x; 1] >= 0 for each of these (a Plane keeps the other sign).
-        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].into_iter().filter_map(|h| Plane::from_homogeneous(-h)).collect()
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
+            .into_iter()
+            .filter_map(|h| Plane::from_homogeneous(-h))
+            .collect()
     }
 
     /// The view frustum `V` as a polyhedron (may be huge for a far far plane).
