@@ -205,9 +205,8 @@ mod tests {
             plain.sort_unstable_by(lexicographic);
             plain.dedup();
             let mut expected = Vec::new();
-            // Monotone chain without thinning: the scratch buffer holds `plain`.
-            let mut sorted = plain.clone();
-            chain(&mut sorted, &mut expected);
+            // Monotone chain without thinning.
+            chain(&plain, &mut expected);
             assert_eq!(convex_hull_2d(&points), expected, "case {case}");
         }
     }
