@@ -42,6 +42,8 @@ pub mod fit;
 pub mod geometry;
 mod light;
 mod matrix;
+#[cfg(feature = "render")]
+pub mod mesh;
 mod methods;
 mod problem;
 mod scene;
