@@ -46,6 +46,8 @@ mod matrix;
 pub mod mesh;
 mod methods;
 mod problem;
+#[cfg(feature = "render")]
+pub mod render;
 mod scene;
 pub mod score;
 mod tolerance;
