@@ -28,6 +28,7 @@
 //! [`Renderer::optional_features`] lists the features worth requesting.
 
 mod analysis;
+pub mod frame_loop;
 mod output;
 mod passes;
 pub mod readback;
@@ -42,13 +43,13 @@ use wgpu::util::DeviceExt;
 use crate::mesh::{MeshError, Scene};
 use crate::{Camera, LightMatrix};
 
-pub use analysis::AnalysisReadback;
+pub use analysis::{AnalysisMeta, AnalysisReadback};
+pub use frame_loop::{AdaptiveLights, AnalysisKind, Cadence};
 pub use output::{shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
 pub use timing::GpuFrameTimes;
 pub use uniforms::MAX_LIGHTS;
 
-use analysis::AnalysisMeta;
 use passes::{CameraTargets, ScenePasses, ShadowMaps, ShadowPass, Target, MASKS_FORMAT, MAX_SHADOW_SLOTS};
 use timing::GpuTimer;
 use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
