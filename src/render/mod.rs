@@ -45,7 +45,7 @@ use crate::{Camera, LightMatrix};
 
 pub use analysis::{AnalysisMeta, AnalysisReadback};
 pub use frame_loop::{AdaptiveLights, AnalysisKind, Cadence};
-pub use output::{shadow_map_image, DepthImage};
+pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
 pub use timing::GpuFrameTimes;
 pub use uniforms::MAX_LIGHTS;

@@ -150,3 +150,19 @@ impl Renderer {
         Ok(out)
     }
 }
+
+/// A picture of shadow masks: background black; visible pixels grey, with
+/// light 0's shadow in red, light 1's in green and light 2's in blue
+/// (further lights are not shown); pixels facing away from every light dark.
+#[must_use]
+pub fn masks_image(masks: &ShadowMasks) -> image::RgbaImage {
+    image::RgbaImage::from_fn(masks.width, masks.height, |x, y| {
+        let i = (y * masks.width + x) as usize;
+        if !masks.visible(i) {
+            return image::Rgba([0, 0, 0, 255]);
+        }
+        let base: u8 = if masks.facing[i] == 0 { 60 } else { 150 };
+        let channel = |light: u32| if masks.shadow[i] >> light & 1 == 1 { 255 } else { base };
+        image::Rgba([channel(0), channel(1), channel(2), 255])
+    })
+}

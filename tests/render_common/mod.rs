@@ -77,3 +77,56 @@ pub fn matrices(
         })
         .collect()
 }
+
+/// Reference images live here.
+pub const REFERENCE_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/reference");
+
+/// Compares `actual` with `tests/reference/{name}.png`: a pixel differs when
+/// any channel differs by more than `channel_tolerance`; the test fails when
+/// more than `max_differing` of the pixels differ (software rasterizers of
+/// different versions disagree on a few edge pixels). On mismatch it writes
+/// `{name}-actual.png` and `{name}-difference.png` next to the test binary's
+/// temporary directory and says where. A missing reference is written from
+/// `actual` (to review and commit) and the test fails.
+pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage, channel_tolerance: u8, max_differing: f64) {
+    let reference_path = std::path::Path::new(REFERENCE_DIR).join(format!("{name}.png"));
+    let Ok(reference) = image::open(&reference_path) else {
+        std::fs::create_dir_all(REFERENCE_DIR).unwrap();
+        actual.save(&reference_path).unwrap();
+        panic!("no reference image; wrote {} from this run: review it and commit it", reference_path.display());
+    };
+    let reference = reference.to_rgba8();
+    let out_dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-mismatch");
+    let write_outputs = |difference: &image::RgbaImage| {
+        std::fs::create_dir_all(&out_dir).unwrap();
+        actual.save(out_dir.join(format!("{name}-actual.png"))).unwrap();
+        difference.save(out_dir.join(format!("{name}-difference.png"))).unwrap();
+    };
+    if reference.dimensions() != actual.dimensions() {
+        write_outputs(actual);
+        panic!("{name}: size {:?} != reference {:?}; see {}", actual.dimensions(), reference.dimensions(), out_dir.display());
+    }
+    let mut differing = 0usize;
+    let difference = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {
+        let (a, r) = (actual.get_pixel(x, y).0, reference.get_pixel(x, y).0);
+        let delta = (0..4).map(|c| a[c].abs_diff(r[c])).max().unwrap_or(0);
+        if delta > channel_tolerance {
+            differing += 1;
+            image::Rgba([255, 0, 0, 255])
+        } else {
+            // Amplified sub-tolerance differences, in grey.
+            let g = delta.saturating_mul(16);
+            image::Rgba([g, g, g, 255])
+        }
+    });
+    let fraction = differing as f64 / f64::from(actual.width() * actual.height());
+    if fraction > max_differing {
+        write_outputs(&difference);
+        panic!(
+            "{name}: {differing} pixels ({:.3}%) differ by more than {channel_tolerance} (allowed {:.3}%); see {}",
+            100.0 * fraction,
+            100.0 * max_differing,
+            out_dir.display()
+        );
+    }
+}
