@@ -42,9 +42,13 @@ pub mod fit;
 pub mod geometry;
 mod light;
 mod matrix;
+#[cfg(feature = "render")]
+pub mod mesh;
 mod methods;
 pub mod optimize;
 mod problem;
+#[cfg(feature = "render")]
+pub mod render;
 mod scene;
 pub mod score;
 pub mod synthetic;

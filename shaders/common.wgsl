@@ -1,0 +1,150 @@
+// Shared declarations of the camera and analysis passes: prepended to
+// camera.wgsl and analysis.wgsl by the renderer (WGSL has no includes).
+//
+// Conventions (wgpu's): right-handed world, clip depth in [0, 1], NDC y up,
+// framebuffer and texture row 0 at the top.
+
+const MAX_LIGHTS: u32 = 32u;
+// `Light::flags` bit: the map was rendered with a reversed depth test
+// (greater is closer, cleared to 0).
+const LIGHT_REVERSED_DEPTH: u32 = 1u;
+
+struct Camera {
+    clip_from_world: mat4x4<f32>,
+    // xyz: eye position in world space.
+    eye: vec4<f32>,
+    // x: ambient light level; yzw: unused.
+    params: vec4<f32>,
+}
+
+struct Light {
+    clip_from_world: mat4x4<f32>,
+    // Homogeneous light position: (p, 1) for a point or spot light, (-d, 0)
+    // for a directional light travelling along d (the point at infinity it
+    // comes from). `to_light` below handles both.
+    position: vec4<f32>,
+    // rgb: radiance scale; a: unused.
+    color: vec4<f32>,
+    // The light's map occupies texels [0, map_size) at the top-left of its
+    // layer of the shadow-map array (layers are as large as the largest map).
+    map_size: vec2<f32>,
+    layer: u32,
+    flags: u32,
+}
+
+struct Lights {
+    count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    items: array<Light, MAX_LIGHTS>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<uniform> lights: Lights;
+@group(0) @binding(2) var shadow_maps: texture_depth_2d_array;
+
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec4<f32>,
+}
+
+struct VertexOutput {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec3<f32>,
+}
+
+@vertex
+fn vs_main(vertex: VertexInput) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = camera.clip_from_world * vec4<f32>(vertex.position, 1.0);
+    out.world = vertex.position;
+    out.normal = vertex.normal;
+    out.albedo = vertex.albedo.rgb;
+    return out;
+}
+
+// Unnormalised direction from `world` towards the light.
+fn to_light(light: Light, world: vec3<f32>) -> vec3<f32> {
+    return light.position.xyz - world * light.position.w;
+}
+
+// Hard shadow test of `world` against the light's map. Points outside the
+// map, or behind the light's image plane, count as lit.
+fn in_shadow(light: Light, world: vec3<f32>) -> bool {
+    let clip = light.clip_from_world * vec4<f32>(world, 1.0);
+    if clip.w <= 0.0 {
+        return false;
+    }
+    let ndc = clip.xyz / clip.w;
+    if any(abs(ndc.xy) > vec2<f32>(1.0)) {
+        return false;
+    }
+    // NDC to texels. x: [-1, 1] -> [0, width). y: NDC y is up but texture
+    // row 0 is at the top, so flip. Texel k covers [k, k + 1); the shadow
+    // pass rasterized it at its centre k + 0.5, so `floor` picks the texel
+    // whose sample is nearest in the sense of the rasterizer's coverage.
+    let texel = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size;
+    let size = vec2<i32>(light.map_size);
+    let coords = clamp(vec2<i32>(floor(texel)), vec2<i32>(0), size - vec2<i32>(1));
+    let stored = textureLoad(shadow_maps, coords, light.layer, 0);
+    // Depth range [0, 1]; receivers beyond the far plane compare as at it.
+    let depth = clamp(ndc.z, 0.0, 1.0);
+    if (light.flags & LIGHT_REVERSED_DEPTH) != 0u {
+        // Reversed test: larger stored values are closer to the light.
+        return stored > depth;
+    }
+    return stored < depth;
+}
+
+struct Shading {
+    // Linear RGB.
+    color: vec3<f32>,
+    // Bit i: light i is blocked here (only set where `facing` is).
+    shadow: u32,
+    // Bit i: the surface faces light i (interpolated normal · to-light > 0).
+    facing: u32,
+}
+
+fn shade(in: VertexOutput) -> Shading {
+    var out: Shading;
+    let n = normalize(in.normal);
+    out.color = camera.params.x * in.albedo;
+    out.shadow = 0u;
+    out.facing = 0u;
+    let count = min(lights.count, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let light = lights.items[i];
+        let n_dot_l = dot(n, normalize(to_light(light, in.world)));
+        if n_dot_l > 0.0 {
+            out.facing |= 1u << i;
+            if in_shadow(light, in.world) {
+                out.shadow |= 1u << i;
+            } else {
+                out.color += in.albedo * light.color.rgb * n_dot_l;
+            }
+        }
+    }
+    return out;
+}
+
+// Octahedral encoding of a unit normal into two signed-normalised 16-bit
+// values (Cigolle et al. 2014), packed in one u32.
+fn pack_normal(n: vec3<f32>) -> u32 {
+    var p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if n.z < 0.0 {
+        p = (1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    return pack2x16snorm(p);
+}
+
+// The per-pixel words read back by the experiments and the optimizer:
+// x: depth-buffer value as f32 bits (the target is cleared to 1.0's bits),
+// y: shadow bits, z: light-facing bits, w: octahedral normal.
+fn mask_words(in: VertexOutput, shading: Shading) -> vec4<u32> {
+    // `clip.z` in a fragment shader is the depth-buffer value in [0, 1].
+    return vec4<u32>(bitcast<u32>(in.clip.z), shading.shadow, shading.facing, pack_normal(normalize(in.normal)));
+}

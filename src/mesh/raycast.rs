@@ -1,0 +1,411 @@
+//! Exact ray casting against triangle meshes: a bounding volume hierarchy,
+//! closest-hit and any-hit queries, and per-pixel shadow masks traced like
+//! the renderer draws them (the ground truth of the shadow experiments).
+//!
+//! # Algorithm
+//! The BVH splits triangle centroids at the median of the longest axis of
+//! their bounds (build `O(n log n)`, leaves of at most [`LEAF_SIZE`]
+//! triangles); queries use slab tests against node boxes and Möller–Trumbore
+//! against triangles (`O(log n)` typical). Rays are traced in parallel with
+//! rayon.
+
+use glam::{DMat4, DVec3, Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::masks::ShadowMasks;
+use super::{Mesh, Scene};
+use crate::{Camera, Light};
+
+/// Most triangles per BVH leaf.
+pub const LEAF_SIZE: usize = 4;
+
+/// A ray `origin + t direction`, `t >= 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Start point.
+    pub origin: Vec3,
+    /// Direction (any non-zero length; `t` is measured in its units).
+    pub direction: Vec3,
+}
+
+/// The nearest intersection of a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Index of the triangle in the mesh the BVH was built from.
+    pub triangle: u32,
+    /// Barycentric coordinates `(u, v)` of the hit: weights of the second and
+    /// third vertex.
+    pub barycentric: Vec2,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    min: Vec3,
+    max: Vec3,
+    /// Leaf: first triangle in `order`; inner node: index of the left child
+    /// (the right child follows it).
+    first: u32,
+    /// Triangles in a leaf; 0 for an inner node.
+    count: u32,
+}
+
+/// A triangle as Möller–Trumbore wants it.
+#[derive(Clone, Copy, Debug)]
+struct Triangle {
+    v0: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+}
+
+/// A bounding volume hierarchy over a mesh's triangles.
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    /// Triangles in leaf order.
+    triangles: Vec<Triangle>,
+    /// Original triangle index of each entry of `triangles`.
+    order: Vec<u32>,
+}
+
+impl Bvh {
+    /// Builds the hierarchy over `mesh`'s triangles. The mesh should be valid
+    /// ([`Mesh::validate`]); out-of-range indices are skipped.
+    #[must_use]
+    pub fn new(mesh: &Mesh) -> Self {
+        let mut items: Vec<(u32, Triangle, Vec3)> = mesh
+            .indices
+            .chunks_exact(3)
+            .enumerate()
+            .filter_map(|(k, tri)| {
+                let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| mesh.positions.get(i as usize).copied());
+                let (a, b, c) = (a?, b?, c?);
+                Some((k as u32, Triangle { v0: a, e1: b - a, e2: c - a }, (a + b + c) / 3.0))
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * items.len() / LEAF_SIZE + 1);
+        nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
+        // Explicit stack of (node, range) to build without recursion.
+        let mut stack = vec![(0usize, 0usize, items.len())];
+        while let Some((node, start, end)) = stack.pop() {
+            let slice = &mut items[start..end];
+            let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            let (mut cmin, mut cmax) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for (_, t, c) in slice.iter() {
+                for v in [t.v0, t.v0 + t.e1, t.v0 + t.e2] {
+                    min = min.min(v);
+                    max = max.max(v);
+                }
+                cmin = cmin.min(*c);
+                cmax = cmax.max(*c);
+            }
+            let extent = cmax - cmin;
+            if slice.len() <= LEAF_SIZE || extent.max_element() <= 0.0 {
+                nodes[node] = Node { min, max, first: start as u32, count: slice.len() as u32 };
+                continue;
+            }
+            let axis = extent.max_position();
+            let mid = slice.len() / 2;
+            slice.select_nth_unstable_by(mid, |a, b| a.2[axis].total_cmp(&b.2[axis]));
+            let left = nodes.len();
+            nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
+            nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
+            nodes[node] = Node { min, max, first: left as u32, count: 0 };
+            stack.push((left, start, start + mid));
+            stack.push((left + 1, start + mid, end));
+        }
+        if items.is_empty() {
+            nodes[0] = Node { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY, first: 0, count: 0 };
+        }
+        Self {
+            nodes,
+            order: items.iter().map(|(k, _, _)| *k).collect(),
+            triangles: items.into_iter().map(|(_, t, _)| t).collect(),
+        }
+    }
+
+    /// Number of triangles.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The nearest hit with `0 <= t < t_max`.
+    #[must_use]
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        // Shared by the traversal (which prunes with it) and the triangle test.
+        let t_best = std::cell::Cell::new(t_max);
+        self.traverse(ray, |t_lim| t_lim.min(t_best.get()), |k, tri| {
+            if let Some((t, uv)) = intersect(ray, tri, t_best.get()) {
+                t_best.set(t);
+                best = Some(Hit { t, triangle: self.order[k], barycentric: uv });
+            }
+            false
+        });
+        best
+    }
+
+    /// Whether anything blocks the ray for `0 <= t < t_max`.
+    #[must_use]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let mut hit = false;
+        self.traverse(ray, |t| t.min(t_max), |_, tri| {
+            hit = intersect(ray, tri, t_max).is_some();
+            hit
+        });
+        hit
+    }
+
+    /// Depth-first traversal, nearer child first. `limit` gives the current
+    /// search distance; `visit` tests one triangle and returns `true` to stop.
+    fn traverse(
+        &self,
+        ray: &Ray,
+        mut limit: impl FnMut(f32) -> f32,
+        mut visit: impl FnMut(usize, &Triangle) -> bool,
+    ) {
+        if self.triangles.is_empty() {
+            return;
+        }
+        // Division by a zero component gives ±inf, which the slab test handles.
+        let inv = ray.direction.recip();
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if slab(ray.origin, inv, node.min, node.max, limit(f32::INFINITY)).is_none() {
+                continue;
+            }
+            if node.count > 0 {
+                let first = node.first as usize;
+                for k in first..first + node.count as usize {
+                    if visit(k, &self.triangles[k]) {
+                        return;
+                    }
+                }
+                continue;
+            }
+            let (l, r) = (node.first as usize, node.first as usize + 1);
+            let t_max = limit(f32::INFINITY);
+            let dl = slab(ray.origin, inv, self.nodes[l].min, self.nodes[l].max, t_max);
+            let dr = slab(ray.origin, inv, self.nodes[r].min, self.nodes[r].max, t_max);
+            // Push the farther child first so the nearer one is visited next.
+            let mut push = |i: usize| {
+                if top < stack.len() {
+                    stack[top] = i as u32;
+                    top += 1;
+                }
+            };
+            match (dl, dr) {
+                (Some(a), Some(b)) if a <= b => {
+                    push(r);
+                    push(l);
+                }
+                (Some(_), Some(_)) => {
+                    push(l);
+                    push(r);
+                }
+                (Some(_), None) => push(l),
+                (None, Some(_)) => push(r),
+                (None, None) => {}
+            }
+        }
+    }
+}
+
+/// Entry distance of the ray into a box, if it enters before `t_max`.
+fn slab(origin: Vec3, inv_dir: Vec3, min: Vec3, max: Vec3, t_max: f32) -> Option<f32> {
+    let t0 = (min - origin) * inv_dir;
+    let t1 = (max - origin) * inv_dir;
+    // NaN (0 * inf on a slab boundary) is dropped by min/max.
+    let near = t0.min(t1).max_element().max(0.0);
+    let far = t0.max(t1).min_element().min(t_max);
+    (near <= far).then_some(near)
+}
+
+/// Möller–Trumbore: `(t, (u, v))` for a hit with `0 <= t < t_max`.
+fn intersect(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<(f32, Vec2)> {
+    let p = ray.direction.cross(tri.e2);
+    let det = tri.e1.dot(p);
+    if det.abs() < f32::MIN_POSITIVE {
+        return None;
+    }
+    let inv_det = det.recip();
+    let s = ray.origin - tri.v0;
+    let u = s.dot(p) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(tri.e1);
+    let v = ray.direction.dot(q) * inv_det;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = tri.e2.dot(q) * inv_det;
+    (t >= 0.0 && t < t_max).then_some((t, Vec2::new(u, v)))
+}
+
+/// A scene ready for ray casting: its triangles merged into one BVH, with
+/// the vertex normals for shading decisions.
+#[derive(Clone, Debug)]
+pub struct RayCaster {
+    mesh: Mesh,
+    bvh: Bvh,
+    /// Offset of shadow-ray origins along the surface normal, in world units.
+    pub shadow_ray_offset: f32,
+}
+
+impl RayCaster {
+    /// Builds the BVH over every object of `scene`. The shadow-ray offset
+    /// defaults to `1e-4` of the scene's diagonal.
+    #[must_use]
+    pub fn new(scene: &Scene) -> Self {
+        let (mesh, _) = scene.merged();
+        let bvh = Bvh::new(&mesh);
+        let diagonal = mesh.bounds().map_or(1.0, |b| b.diagonal()) as f32;
+        Self { mesh, bvh, shadow_ray_offset: 1e-4 * diagonal }
+    }
+
+    /// The BVH.
+    #[must_use]
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// The interpolated unit vertex normal and geometric normal at a hit.
+    #[must_use]
+    pub fn normals_at(&self, hit: &Hit) -> (Vec3, Vec3) {
+        let k = 3 * hit.triangle as usize;
+        let [a, b, c] = [0, 1, 2].map(|i| self.mesh.indices[k + i] as usize);
+        let (u, v) = (hit.barycentric.x, hit.barycentric.y);
+        let shading = (self.mesh.normals[a] * (1.0 - u - v) + self.mesh.normals[b] * u + self.mesh.normals[c] * v)
+            .normalize_or_zero();
+        let [pa, pb, pc] = [a, b, c].map(|i| self.mesh.positions[i]);
+        let geometric = (pb - pa).cross(pc - pa).normalize_or_zero();
+        (shading, geometric)
+    }
+
+    /// Whether `light` is blocked from the surface point `point` with
+    /// geometric normal `geometric_normal` (facing the light is not checked).
+    #[must_use]
+    pub fn in_shadow(&self, point: Vec3, geometric_normal: Vec3, light: &Light) -> bool {
+        let (to_light, t_max) = match *light {
+            Light::Directional { direction } => (-direction.as_vec3(), f32::INFINITY),
+            Light::Point { position } | Light::Spot { position, .. } => (position.as_vec3() - point, 1.0),
+        };
+        // Offset towards the light's side of the surface so that the ray
+        // never re-hits the triangle it starts on.
+        let side = if geometric_normal.dot(to_light) >= 0.0 { 1.0 } else { -1.0 };
+        let origin = point + geometric_normal * (side * self.shadow_ray_offset);
+        let t_max = if t_max.is_finite() { t_max * (1.0 - 1e-5) } else { t_max };
+        self.bvh.occluded(&Ray { origin, direction: to_light }, t_max)
+    }
+
+    /// Traces one primary ray through every pixel centre of the camera's
+    /// viewport scaled to `width x height`, and for every light tests facing
+    /// (`interpolated normal · to-light > 0`) and occlusion, exactly as the
+    /// renderer's mask output defines them (see [`ShadowMasks`]). At most 32
+    /// lights; the rest are ignored.
+    #[must_use]
+    pub fn trace_masks(&self, camera: &Camera, lights: &[Light], width: u32, height: u32) -> ShadowMasks {
+        let lights = &lights[..lights.len().min(32)];
+        let clip_from_world = camera.clip_from_world();
+        let world_from_clip = clip_from_world.inverse();
+        let pixels: Vec<(f32, u32, u32)> = (0..width * height)
+            .into_par_iter()
+            .map(|i| self.trace_pixel(i % width, i / width, width, height, &clip_from_world, &world_from_clip, lights))
+            .collect();
+        ShadowMasks {
+            width,
+            height,
+            depth: pixels.iter().map(|p| p.0).collect(),
+            shadow: pixels.iter().map(|p| p.1).collect(),
+            facing: pixels.iter().map(|p| p.2).collect(),
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn trace_pixel(
+        &self,
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+        clip_from_world: &DMat4,
+        world_from_clip: &DMat4,
+        lights: &[Light],
+    ) -> (f32, u32, u32) {
+        // Pixel centre to NDC: x right; row 0 at the top, NDC y up (flip).
+        let ndc_x = (f64::from(x) + 0.5) / f64::from(width) * 2.0 - 1.0;
+        let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(height) * 2.0;
+        // Depth 0 is the near plane, 1 the far plane (wgpu's range).
+        let near = world_from_clip.project_point3(DVec3::new(ndc_x, ndc_y, 0.0));
+        let far = world_from_clip.project_point3(DVec3::new(ndc_x, ndc_y, 1.0));
+        let ray = Ray { origin: near.as_vec3(), direction: (far - near).as_vec3() };
+        let Some(hit) = self.bvh.closest_hit(&ray, 1.0) else {
+            return (1.0, 0, 0);
+        };
+        let point = near + (far - near) * f64::from(hit.t);
+        let depth = clip_from_world.project_point3(point).z as f32;
+        let point = point.as_vec3();
+        let (shading, geometric) = self.normals_at(&hit);
+        let (mut shadow, mut facing) = (0u32, 0u32);
+        for (i, light) in lights.iter().enumerate() {
+            let to_light = match *light {
+                Light::Directional { direction } => -direction.as_vec3(),
+                Light::Point { position } | Light::Spot { position, .. } => position.as_vec3() - point,
+            };
+            if shading.dot(to_light) > 0.0 {
+                facing |= 1 << i;
+                if self.in_shadow(point, geometric, light) {
+                    shadow |= 1 << i;
+                }
+            }
+        }
+        (depth, shadow, facing)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::primitives;
+    use super::*;
+
+    /// Brute force over all triangles, for comparison.
+    fn brute_closest(mesh: &Mesh, ray: &Ray) -> Option<f32> {
+        mesh.indices
+            .chunks_exact(3)
+            .filter_map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+                intersect(ray, &Triangle { v0: a, e1: b - a, e2: c - a }, f32::INFINITY).map(|h| h.0)
+            })
+            .reduce(f32::min)
+    }
+
+    #[test]
+    fn bvh_matches_brute_force() {
+        let mut mesh = primitives::sphere(1.0, 2000);
+        mesh.append(&primitives::torus(2.0, 0.4, 2000));
+        let bvh = Bvh::new(&mesh);
+        let mut hits = 0;
+        for i in 0..400 {
+            let a = i as f32 * 0.37;
+            let origin = Vec3::new(5.0 * a.cos(), 0.3 * (a * 1.7).sin(), 5.0 * a.sin());
+            let target = Vec3::new((a * 2.3).sin() * 1.5, (a * 0.9).cos() * 0.5, (a * 1.1).cos() * 1.5);
+            let ray = Ray { origin, direction: target - origin };
+            let got = bvh.closest_hit(&ray, f32::INFINITY).map(|h| h.t);
+            let want = brute_closest(&mesh, &ray);
+            assert_eq!(got.is_some(), want.is_some(), "ray {i}");
+            if let (Some(g), Some(w)) = (got, want) {
+                assert!((g - w).abs() < 1e-5, "ray {i}: {g} vs {w}");
+                hits += 1;
+                assert!(bvh.occluded(&ray, g + 1e-3));
+                assert!(!bvh.occluded(&ray, g * 0.999));
+            }
+        }
+        assert!(hits > 100);
+    }
+}

@@ -1,0 +1,151 @@
+//! The analysis pass's read-back data, decoded.
+
+use glam::{DVec3, Vec2, Vec3};
+
+use super::readback::{Readback, ReadbackLatency};
+use crate::mesh::ShadowMasks;
+use crate::{Camera, LightMatrix};
+
+/// Bytes per texel of the masks target (`Rgba32Uint`).
+pub(crate) const MASK_TEXEL_BYTES: u64 = 16;
+
+/// Bytes per row of a `width`-texel masks copy, padded to wgpu's 256.
+pub(crate) fn padded_row_bytes(width: u32) -> u64 {
+    let unpadded = u64::from(width) * MASK_TEXEL_BYTES;
+    unpadded.div_ceil(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)) * u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+}
+
+/// What an analysis readback was rendered with.
+#[derive(Clone, Debug)]
+pub struct AnalysisMeta {
+    pub(crate) camera: Camera,
+    pub(crate) lights: Vec<LightMatrix>,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) tag: u32,
+}
+
+/// One analysis pass read back: the camera's view at low resolution with
+/// depth, shadow and light-facing bits and normals, plus the camera and
+/// matrices it was rendered with.
+#[derive(Clone, Debug)]
+pub struct AnalysisReadback {
+    /// Frame the pass was rendered in.
+    pub frame: u64,
+    /// How late it arrived.
+    pub latency: ReadbackLatency,
+    /// The camera of that frame (its viewport is the full resolution).
+    pub camera: Camera,
+    /// The matrices whose maps the shadow bits were looked up in.
+    pub lights: Vec<LightMatrix>,
+    /// The tag of the request.
+    pub tag: u32,
+    /// Depth, shadow and facing bits at the analysis resolution.
+    pub masks: ShadowMasks,
+    /// Octahedral-encoded normals (two snorm16), one per pixel; see
+    /// [`normal`](Self::normal).
+    pub packed_normals: Vec<u32>,
+}
+
+impl AnalysisReadback {
+    pub(crate) fn decode(readback: Readback<AnalysisMeta>) -> Self {
+        let Readback { meta, frame, bytes, latency } = readback;
+        let (w, h) = (meta.width as usize, meta.height as usize);
+        let row = padded_row_bytes(meta.width) as usize;
+        let mut masks = ShadowMasks {
+            width: meta.width,
+            height: meta.height,
+            depth: Vec::with_capacity(w * h),
+            shadow: Vec::with_capacity(w * h),
+            facing: Vec::with_capacity(w * h),
+        };
+        let mut packed_normals = Vec::with_capacity(w * h);
+        for y in 0..h {
+            let words: &[u32] = bytemuck::cast_slice(&bytes[y * row..y * row + w * MASK_TEXEL_BYTES as usize]);
+            for texel in words.chunks_exact(4) {
+                masks.depth.push(f32::from_bits(texel[0]));
+                masks.shadow.push(texel[1]);
+                masks.facing.push(texel[2]);
+                packed_normals.push(texel[3]);
+            }
+        }
+        Self { frame, latency, camera: meta.camera, lights: meta.lights, tag: meta.tag, masks, packed_normals }
+    }
+
+    /// The unit surface normal at pixel `(x, y)` (zero for background).
+    #[must_use]
+    pub fn normal(&self, x: u32, y: u32) -> Vec3 {
+        let i = (y * self.masks.width + x) as usize;
+        if !self.masks.visible(i) {
+            return Vec3::ZERO;
+        }
+        unpack_normal(self.packed_normals[i])
+    }
+
+    /// Full-resolution screen coordinates `(x1, x2, x3)` of the centre of
+    /// analysis pixel `(x, y)`: pixels of the camera's viewport and the
+    /// depth-buffer value, i.e. the point `y` of math.md §2 (`S [Xw; 1]`).
+    #[must_use]
+    pub fn screen_point(&self, x: u32, y: u32) -> DVec3 {
+        let i = (y * self.masks.width + x) as usize;
+        let scale = self.camera.viewport().as_dvec2() / glam::DVec2::new(self.masks.width.into(), self.masks.height.into());
+        DVec3::new(
+            (f64::from(x) + 0.5) * scale.x,
+            (f64::from(y) + 0.5) * scale.y,
+            f64::from(self.masks.depth[i]),
+        )
+    }
+
+    /// World position of the surface at analysis pixel `(x, y)`; `None` for
+    /// background.
+    #[must_use]
+    pub fn world_point(&self, x: u32, y: u32) -> Option<DVec3> {
+        let i = (y * self.masks.width + x) as usize;
+        self.masks.visible(i).then(|| {
+            let world_from_screen = self.camera.screen_from_world().inverse();
+            world_from_screen.project_point3(self.screen_point(x, y))
+        })
+    }
+}
+
+/// Inverse of `pack_normal` in `common.wgsl`.
+#[must_use]
+fn unpack_normal(packed: u32) -> Vec3 {
+    let snorm = |bits: u32| (f32::from(bits as u16 as i16) / 32767.0).max(-1.0);
+    let p = Vec2::new(snorm(packed & 0xffff), snorm(packed >> 16));
+    let z = 1.0 - p.x.abs() - p.y.abs();
+    let sign = Vec2::select(p.cmpge(Vec2::ZERO), Vec2::ONE, -Vec2::ONE);
+    let xy = if z < 0.0 { (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs())) * sign } else { p };
+    Vec3::new(xy.x, xy.y, z).normalize_or_zero()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// CPU copy of the shader's `pack_normal`, for the round trip.
+    fn pack_normal(n: Vec3) -> u32 {
+        let mut p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
+        if n.z < 0.0 {
+            p = (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs())) * Vec2::select(p.cmpge(Vec2::ZERO), Vec2::ONE, -Vec2::ONE);
+        }
+        let q = |v: f32| ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
+        q(p.x) | q(p.y) << 16
+    }
+
+    #[test]
+    fn normals_round_trip() {
+        for i in 0..200 {
+            let a = i as f32 * 0.731;
+            let n = Vec3::new(a.cos() * (a * 0.3).sin(), (a * 1.7).sin(), (a * 0.3).cos() * a.sin()).normalize();
+            let back = unpack_normal(pack_normal(n));
+            assert!((back - n).length() < 1e-3, "{n} -> {back}");
+        }
+    }
+
+    #[test]
+    fn rows_are_padded_to_256_bytes() {
+        assert_eq!(padded_row_bytes(180), 3072);
+        assert_eq!(padded_row_bytes(64), 1024);
+    }
+}

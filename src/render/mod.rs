@@ -1,0 +1,763 @@
+//! A wgpu renderer for lixel's light matrices (feature `render`).
+//!
+//! One frame ([`Renderer::render`]) is, in order:
+//!
+//! 1. **Shadow passes** (`shaders/shadow.wgsl`): depth only, one per light,
+//!    into one layer each of a `Depth32Float` array; each map is sized by its
+//!    [`LightMatrix::map_size`], rendered with a reversed depth test when
+//!    [`LightMatrix::reverse_depth_test`] is set and with unclipped depth when
+//!    [`LightMatrix::needs_unclipped_depth`] is set and the device has
+//!    `DEPTH_CLIP_CONTROL`. Bias: [`ShadowBias`], the same for every method.
+//! 2. **Camera pass** (`shaders/camera.wgsl`): the camera's view with hard
+//!    shadows of up to 32 lights (points outside a map count as lit);
+//!    optionally the full-resolution per-pixel masks (depth, one shadow bit
+//!    and one light-facing bit per light, normal) for the experiments.
+//! 3. **Analysis pass** (`shaders/analysis.wgsl`, when asked for): the same
+//!    view at low resolution (180x180 by default) writing only the masks,
+//!    optionally looked up in a different set of maps (the periodic focused
+//!    analysis of the paper's section 2.4), copied into a [`ReadbackRing`]
+//!    slot. [`Renderer::try_take_analysis`] hands it back frames later
+//!    without ever waiting; when every slot is in flight the frame skips its
+//!    analysis instead of stalling.
+//!
+//! GPU timestamps of the three stages come back the same way
+//! ([`Renderer::try_take_gpu_times`]) when the device has `TIMESTAMP_QUERY`.
+//!
+//! The renderer takes a `&wgpu::Device` and `&wgpu::Queue`; choosing an
+//! adapter, windows and files are the application's business.
+//! [`Renderer::optional_features`] lists the features worth requesting.
+
+mod analysis;
+pub mod frame_loop;
+mod output;
+mod passes;
+pub mod readback;
+mod timing;
+mod uniforms;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+use crate::mesh::{MeshError, Scene};
+use crate::{Camera, LightMatrix};
+
+pub use analysis::{AnalysisMeta, AnalysisReadback};
+pub use frame_loop::{AdaptiveLights, AnalysisKind, Cadence};
+pub use output::{masks_image, shadow_map_image, DepthImage};
+pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
+pub use timing::GpuFrameTimes;
+pub use uniforms::MAX_LIGHTS;
+
+use passes::{CameraTargets, ScenePasses, ShadowMaps, ShadowPass, Target, MASKS_FORMAT, MAX_SHADOW_SLOTS};
+use timing::GpuTimer;
+use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
+
+/// Why the renderer refused a request.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// More lights than the 32 bits of the shadow masks.
+    #[error("{count} lights requested; at most {MAX_LIGHTS} are supported")]
+    TooManyLights {
+        /// Lights requested.
+        count: usize,
+    },
+    /// A shadow map is empty or larger than the device allows.
+    #[error("light {light}: shadow map {width}x{height} outside 1..={max} texels per side")]
+    BadMapSize {
+        /// Index of the light.
+        light: usize,
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// The device's `max_texture_dimension_2d`.
+        max: u32,
+    },
+    /// A light matrix holds NaN or infinity.
+    #[error("light {light}: non-finite light matrix")]
+    NonFiniteMatrix {
+        /// Index of the light.
+        light: usize,
+    },
+    /// The camera's viewport or the analysis size exceeds the device's limit.
+    #[error("target {width}x{height} exceeds the device limit {max}")]
+    TargetTooLarge {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// The device's `max_texture_dimension_2d`.
+        max: u32,
+    },
+    /// The scene cannot be uploaded.
+    #[error("invalid scene: {0}")]
+    Scene(#[from] MeshError),
+    /// Something was read back before any frame was rendered.
+    #[error("nothing rendered yet")]
+    NothingRendered,
+    /// A light index past the last frame's lights.
+    #[error("no light {light} in the last frame ({count} lights)")]
+    NoSuchLight {
+        /// Requested index.
+        light: usize,
+        /// Lights of the last frame.
+        count: usize,
+    },
+    /// Mapping a buffer for a blocking read failed.
+    #[error("buffer mapping failed: {0}")]
+    Map(#[from] wgpu::BufferAsyncError),
+    /// Waiting for the device failed (device lost, timeout).
+    #[error("device poll failed: {0}")]
+    Poll(#[from] wgpu::PollError),
+}
+
+/// The depth bias of every shadow map, the same for every method.
+///
+/// The rasterizer adds `slope_scale · m + constant · r` to each shadow-map
+/// depth, where `m = max(|∂z/∂x|, |∂z/∂y|)` is the primitive's depth slope
+/// per texel and `r` the smallest depth step at the primitive's depth (for
+/// `Depth32Float`, `2^(e - 23)` with `e` the exponent of its largest depth),
+/// clamped to `clamp` when that is non-zero. A receiver looked up at most
+/// half a texel from a texel centre along each axis differs from the stored
+/// depth by at most `m` (for depth linear in the map), so `slope_scale >= 1`
+/// prevents self-shadowing of planar surfaces; `2` leaves room for the
+/// non-linear depth of perspective maps (PSM, LiSPSM, point lights). The
+/// bias is applied away from the light: subtracted under a reversed depth
+/// test. No normal offset is used at lookup, so the only method-dependent
+/// effect is through each map's own slopes, as in the papers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowBias {
+    /// In units of the smallest depth step `r`.
+    pub constant: i32,
+    /// Multiple of the depth slope per texel.
+    pub slope_scale: f32,
+    /// Largest bias in depth units; 0 for none.
+    pub clamp: f32,
+}
+
+impl Default for ShadowBias {
+    fn default() -> Self {
+        Self { constant: 16, slope_scale: 2.0, clamp: 0.0 }
+    }
+}
+
+impl ShadowBias {
+    /// The bias as wgpu wants it, negated for a reversed depth test.
+    #[must_use]
+    pub fn depth_bias_state(&self, reversed: bool) -> wgpu::DepthBiasState {
+        let sign = if reversed { -1 } else { 1 };
+        wgpu::DepthBiasState {
+            constant: sign * self.constant,
+            slope_scale: sign as f32 * self.slope_scale,
+            clamp: self.clamp,
+        }
+    }
+}
+
+/// Settings fixed when the renderer is created.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RendererOptions {
+    /// Resolution of the analysis pass (the paper: 180x180 for 1150² screens).
+    pub analysis_size: (u32, u32),
+    /// Staging buffers of the analysis readback ring (the paper used 2).
+    pub readback_slots: usize,
+    /// Shadow-map depth bias.
+    pub bias: ShadowBias,
+    /// Light that reaches every surface regardless of shadows, in `[0, 1]`.
+    pub ambient: f32,
+    /// Clear colour of the camera pass (linear RGB).
+    pub background: Vec3,
+    /// Record GPU timestamps when the device supports them.
+    pub timestamps: bool,
+}
+
+impl Default for RendererOptions {
+    fn default() -> Self {
+        Self {
+            analysis_size: (180, 180),
+            readback_slots: 3,
+            bias: ShadowBias::default(),
+            ambient: 0.25,
+            background: Vec3::new(0.55, 0.68, 0.85),
+            timestamps: true,
+        }
+    }
+}
+
+/// An analysis pass to render this frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AnalysisRequest<'a> {
+    /// Maps to look shadows up in; `None`: the frame's own. The paper
+    /// periodically uses standard (focused) maps here so that shadows that
+    /// moved into view are not missed by maps optimized for the old view.
+    pub lights: Option<&'a [LightMatrix]>,
+    /// A number handed back with the readback (e.g. which maps were used).
+    pub tag: u32,
+}
+
+/// What to render in one frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame<'a> {
+    /// The viewer; its viewport is the camera pass's resolution.
+    pub camera: &'a Camera,
+    /// One shadow map per light (at most [`MAX_LIGHTS`]).
+    pub lights: &'a [LightMatrix],
+    /// Also write the full-resolution masks ([`Renderer::read_masks`]).
+    pub masks: bool,
+    /// Render the low-resolution analysis pass and queue its readback.
+    pub analysis: Option<AnalysisRequest<'a>>,
+}
+
+/// What [`Renderer::render`] did.
+#[derive(Clone, Debug)]
+pub struct FrameReport {
+    /// Index of the frame (0, 1, 2, ...).
+    pub frame: u64,
+    /// The queue submission of the frame.
+    pub submission: wgpu::SubmissionIndex,
+    /// An analysis pass was requested but every readback slot was in
+    /// flight, so it was skipped (the frame did not wait).
+    pub analysis_skipped: bool,
+    /// An analysis readback was queued.
+    pub analysis_queued: bool,
+    /// Lights that needed unclipped depth the device could not provide.
+    pub unclipped_unavailable: u32,
+    /// CPU time spent encoding and submitting.
+    pub cpu_time: std::time::Duration,
+}
+
+/// The scene on the GPU.
+struct GpuScene {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+}
+
+/// Per-frame uniforms and bind group of one scene pass (camera or analysis).
+struct SceneBindings {
+    lights: wgpu::Buffer,
+    bind_group: Option<wgpu::BindGroup>,
+}
+
+/// Shadows for many lights, a camera pass and asynchronous low-resolution
+/// readback. See the [module docs](self).
+pub struct Renderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    options: RendererOptions,
+    max_texture: u32,
+    unclipped_available: bool,
+    scene: GpuScene,
+    shadow: ShadowPass,
+    passes: ScenePasses,
+    camera_uniforms: wgpu::Buffer,
+    camera_bindings: SceneBindings,
+    analysis_bindings: SceneBindings,
+    shadow_maps: ShadowMaps,
+    camera_targets: Option<CameraTargets>,
+    analysis_masks: Target,
+    analysis_depth: Target,
+    ring: ReadbackRing<AnalysisMeta>,
+    timer: Option<GpuTimer>,
+    frame: u64,
+    /// Lights of the last frame (for reading maps back).
+    last_lights: Vec<LightMatrix>,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("options", &self.options)
+            .field("frame", &self.frame)
+            .field("triangles", &(self.scene.index_count / 3))
+            .field("unclipped_available", &self.unclipped_available)
+            .field("timestamps", &self.timer.is_some())
+            .field("ring", &self.ring)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Renderer {
+    /// Features the renderer uses when the device has them:
+    /// `DEPTH_CLIP_CONTROL` (unclipped depth) and `TIMESTAMP_QUERY`.
+    #[must_use]
+    pub fn optional_features() -> wgpu::Features {
+        wgpu::Features::DEPTH_CLIP_CONTROL | wgpu::Features::TIMESTAMP_QUERY
+    }
+
+    /// Uploads `scene` and builds the pipelines.
+    ///
+    /// # Errors
+    /// [`RenderError::Scene`] for an invalid or empty scene;
+    /// [`RenderError::TargetTooLarge`] for an analysis size past the device
+    /// limit.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        options: RendererOptions,
+    ) -> Result<Self, RenderError> {
+        scene.validate()?;
+        let max_texture = device.limits().max_texture_dimension_2d;
+        let (aw, ah) = options.analysis_size;
+        check_target(aw, ah, max_texture)?;
+        let features = device.features();
+        let unclipped_available = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
+        let timer = (options.timestamps && features.contains(wgpu::Features::TIMESTAMP_QUERY))
+            .then(|| GpuTimer::new(device, queue));
+
+        let mut vertices = Vec::with_capacity(scene.vertex_count());
+        let mut indices = Vec::with_capacity(3 * scene.triangle_count());
+        for object in &scene.objects {
+            let base = vertices.len() as u32;
+            let albedo = (object.albedo.clamp(Vec3::ZERO, Vec3::ONE) * 255.0).round().as_uvec3();
+            let albedo = [albedo.x as u8, albedo.y as u8, albedo.z as u8, 255];
+            vertices.extend(object.mesh.positions.iter().zip(&object.mesh.normals).map(|(p, n)| VertexRaw {
+                position: p.to_array(),
+                normal: n.to_array(),
+                albedo,
+            }));
+            indices.extend(object.mesh.indices.iter().map(|i| i + base));
+        }
+        let gpu_scene = GpuScene {
+            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lixel scene vertices"),
+                contents: bytemuck::cast_slice(&vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+            indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lixel scene indices"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+            index_count: indices.len() as u32,
+        };
+        let camera_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lixel camera uniforms"),
+            size: std::mem::size_of::<CameraRaw>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let lights_buffer = |label| SceneBindings {
+            lights: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: std::mem::size_of::<LightsRaw>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            bind_group: None,
+        };
+        let ring = ReadbackRing::new(
+            device,
+            "lixel analysis readback",
+            options.readback_slots,
+            analysis::padded_row_bytes(aw) * u64::from(ah),
+        );
+        Ok(Self {
+            device: device.clone(),
+            queue: queue.clone(),
+            max_texture,
+            unclipped_available,
+            scene: gpu_scene,
+            shadow: ShadowPass::new(device, options.bias, unclipped_available),
+            passes: ScenePasses::new(device),
+            camera_uniforms,
+            camera_bindings: lights_buffer("lixel camera pass lights"),
+            analysis_bindings: lights_buffer("lixel analysis pass lights"),
+            shadow_maps: ShadowMaps::new(device, 1, 1, 1),
+            camera_targets: None,
+            analysis_masks: Target::new(device, "lixel analysis masks", MASKS_FORMAT, aw, ah),
+            analysis_depth: Target::new(device, "lixel analysis depth", passes::DEPTH_FORMAT, aw, ah),
+            ring,
+            timer,
+            frame: 0,
+            last_lights: Vec::new(),
+            options,
+        })
+    }
+
+    /// The options it was created with.
+    #[must_use]
+    pub fn options(&self) -> &RendererOptions {
+        &self.options
+    }
+
+    /// Whether lights needing unclipped depth get it on this device.
+    #[must_use]
+    pub fn unclipped_depth_available(&self) -> bool {
+        self.unclipped_available
+    }
+
+    /// Whether GPU timestamps are recorded.
+    #[must_use]
+    pub fn timestamps_enabled(&self) -> bool {
+        self.timer.is_some()
+    }
+
+    /// Triangles of the uploaded scene.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.scene.index_count as usize / 3
+    }
+
+    /// Index the next frame will get.
+    #[must_use]
+    pub fn next_frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// The analysis readback ring (for its statistics).
+    #[must_use]
+    pub fn readback_ring(&self) -> &ReadbackRing<AnalysisMeta> {
+        &self.ring
+    }
+
+    /// Renders and submits one frame. Never waits for the GPU.
+    ///
+    /// # Errors
+    /// [`RenderError::TooManyLights`], [`RenderError::BadMapSize`],
+    /// [`RenderError::NonFiniteMatrix`] or [`RenderError::TargetTooLarge`]
+    /// for bad input; nothing is rendered then.
+    pub fn render(&mut self, frame: &Frame<'_>) -> Result<FrameReport, RenderError> {
+        let started = Instant::now();
+        let analysis_lights = frame.analysis.and_then(|a| a.lights);
+        self.validate(frame.lights)?;
+        if let Some(lights) = analysis_lights {
+            self.validate(lights)?;
+        }
+        let viewport = frame.camera.viewport();
+        check_target(viewport.x, viewport.y, self.max_texture)?;
+
+        // Shadow-map slots: the frame's lights, then the analysis pass's own.
+        let mut slots: Vec<&LightMatrix> = frame.lights.iter().collect();
+        slots.extend(analysis_lights.into_iter().flatten());
+        debug_assert!(slots.len() <= MAX_SHADOW_SLOTS);
+        self.ensure_resources(&slots, viewport.x, viewport.y);
+
+        // Uniforms. Light intensity is split so that n lights add up to 1.
+        let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
+        let raw_lights = |lights: &[LightMatrix], first_layer: u32| -> Vec<LightRaw> {
+            let color = light_color(lights.len());
+            lights.iter().enumerate().map(|(i, m)| LightRaw::to_raw(m, first_layer + i as u32, color)).collect()
+        };
+        self.queue.write_buffer(
+            &self.camera_uniforms,
+            0,
+            bytemuck::bytes_of(&CameraRaw::to_raw(frame.camera, self.options.ambient)),
+        );
+        self.queue.write_buffer(
+            &self.camera_bindings.lights,
+            0,
+            bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(frame.lights, 0))),
+        );
+        if frame.analysis.is_some() {
+            let (lights, first) = match analysis_lights {
+                Some(lights) => (lights, frame.lights.len() as u32),
+                None => (frame.lights, 0),
+            };
+            self.queue.write_buffer(
+                &self.analysis_bindings.lights,
+                0,
+                bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(lights, first))),
+            );
+        }
+        let shadow_raw: Vec<ShadowPassRaw> =
+            slots.iter().map(|m| ShadowPassRaw::to_raw(m.clip_from_world_f32())).collect();
+        if !shadow_raw.is_empty() {
+            self.queue.write_buffer(&self.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
+        }
+
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some(&format!("lixel frame {}", self.frame)),
+        });
+        let timer = self.timer.as_mut().and_then(GpuTimer::begin_frame);
+        let unclipped_unavailable = self.encode_shadow_passes(&mut encoder, &slots, timer.as_ref());
+        self.encode_camera_pass(&mut encoder, frame.masks, timer.as_ref());
+
+        let mut analysis_skipped = false;
+        let mut analysis_slot = None;
+        if frame.analysis.is_some() {
+            match self.ring.acquire() {
+                Some((slot, buffer)) => {
+                    let buffer = buffer.clone();
+                    self.encode_analysis_pass(&mut encoder, &buffer, timer.as_ref());
+                    analysis_slot = Some(slot);
+                }
+                None => analysis_skipped = true,
+            }
+        }
+        if let (Some(t), Some(timer)) = (timer.as_ref(), self.timer.as_ref()) {
+            timer.resolve(&mut encoder, t);
+        }
+        let submission = self.queue.submit([encoder.finish()]);
+
+        if let (Some(slot), Some(request)) = (analysis_slot, frame.analysis) {
+            let (w, h) = self.options.analysis_size;
+            let lights = analysis_lights.unwrap_or(frame.lights).to_vec();
+            let meta = AnalysisMeta { camera: *frame.camera, lights, width: w, height: h, tag: request.tag };
+            self.ring.submitted(slot, self.frame, meta);
+        }
+        if let (Some(t), Some(timer)) = (timer, self.timer.as_mut()) {
+            timer.submitted(t, self.frame, !slots.is_empty(), analysis_slot.is_some());
+        }
+        self.last_lights = frame.lights.to_vec();
+        let report = FrameReport {
+            frame: self.frame,
+            submission,
+            analysis_skipped,
+            analysis_queued: analysis_slot.is_some(),
+            unclipped_unavailable,
+            cpu_time: started.elapsed(),
+        };
+        self.frame += 1;
+        Ok(report)
+    }
+
+    /// The newest analysis readback that has arrived, without waiting (one
+    /// non-blocking device poll). `None` while nothing new has arrived: keep
+    /// using the current matrices.
+    pub fn try_take_analysis(&mut self) -> Option<AnalysisReadback> {
+        // The frame that would consume it is the next one to be rendered.
+        let readback = self.ring.try_take(&self.device, self.frame)?;
+        Some(AnalysisReadback::decode(readback))
+    }
+
+    /// GPU times of the newest frame whose timestamps have arrived, without
+    /// waiting. `None` without `TIMESTAMP_QUERY` or while nothing arrived.
+    pub fn try_take_gpu_times(&mut self) -> Option<GpuFrameTimes> {
+        let frame = self.frame;
+        self.timer.as_mut()?.try_take(&self.device, frame)
+    }
+
+    /// Blocks until every submitted frame has finished on the GPU.
+    ///
+    /// # Errors
+    /// [`RenderError::Poll`] when the device is lost.
+    pub fn wait_idle(&self) -> Result<(), RenderError> {
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        Ok(())
+    }
+
+    /// Blocks until `submission` has finished (frame pacing: wait for frame
+    /// `n - k` to keep at most `k` frames in flight).
+    ///
+    /// # Errors
+    /// [`RenderError::Poll`] when the device is lost.
+    pub fn wait_for(&self, submission: &wgpu::SubmissionIndex) -> Result<(), RenderError> {
+        self.device.poll(wgpu::PollType::Wait { submission_index: Some(submission.clone()), timeout: None })?;
+        Ok(())
+    }
+
+    fn validate(&self, lights: &[LightMatrix]) -> Result<(), RenderError> {
+        if lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights { count: lights.len() });
+        }
+        for (light, m) in lights.iter().enumerate() {
+            let (width, height) = (m.map_size.width, m.map_size.height);
+            if width == 0 || height == 0 || width > self.max_texture || height > self.max_texture {
+                return Err(RenderError::BadMapSize { light, width, height, max: self.max_texture });
+            }
+            if !m.clip_from_world_f32().is_finite() {
+                return Err(RenderError::NonFiniteMatrix { light });
+            }
+        }
+        Ok(())
+    }
+
+    /// Grows the shadow-map array and the camera targets as needed and
+    /// (re)creates the bind groups that refer to them.
+    fn ensure_resources(&mut self, slots: &[&LightMatrix], width: u32, height: u32) {
+        let need_w = slots.iter().map(|m| m.map_size.width).max().unwrap_or(1);
+        let need_h = slots.iter().map(|m| m.map_size.height).max().unwrap_or(1);
+        let need_layers = (slots.len() as u32).max(1);
+        let maps = &self.shadow_maps;
+        if need_w > maps.width || need_h > maps.height || need_layers > maps.layers() {
+            self.shadow_maps = ShadowMaps::new(
+                &self.device,
+                need_w.max(maps.width),
+                need_h.max(maps.height),
+                need_layers.max(maps.layers()),
+            );
+            self.camera_bindings.bind_group = None;
+            self.analysis_bindings.bind_group = None;
+        }
+        if self.camera_targets.as_ref().is_none_or(|t| t.width != width || t.height != height) {
+            self.camera_targets = Some(CameraTargets::new(&self.device, "lixel camera", width, height));
+        }
+        for (bindings, label) in [
+            (&mut self.camera_bindings, "lixel camera bind group"),
+            (&mut self.analysis_bindings, "lixel analysis bind group"),
+        ] {
+            if bindings.bind_group.is_none() {
+                bindings.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(label),
+                    layout: &self.passes.layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: self.camera_uniforms.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: bindings.lights.as_entire_binding() },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(&self.shadow_maps.array_view),
+                        },
+                    ],
+                }));
+            }
+        }
+    }
+
+    /// One depth-only pass per slot; returns how many lights wanted
+    /// unclipped depth the device lacks.
+    fn encode_shadow_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slots: &[&LightMatrix],
+        timer: Option<&timing::FrameQueries>,
+    ) -> u32 {
+        let mut unavailable = 0;
+        let last = slots.len().saturating_sub(1);
+        for (i, m) in slots.iter().enumerate() {
+            let reversed = m.reverse_depth_test;
+            let (pipeline, unclipped) = self.shadow.pipeline(reversed, m.needs_unclipped_depth);
+            if m.needs_unclipped_depth && !unclipped {
+                unavailable += 1;
+            }
+            let timestamp_writes = self.timer.as_ref().zip(timer).and_then(|(t, q)| {
+                t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last)
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(&format!("lixel shadow pass {i}")),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.shadow_maps.layer_views[i],
+                    // Far is 1 (0 under a reversed test): nothing blocks.
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(if reversed { 0.0 } else { 1.0 }),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let (w, h) = (m.map_size.width, m.map_size.height);
+            // Only the light's own rectangle at the top-left of the layer.
+            pass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
+            pass.set_scissor_rect(0, 0, w, h);
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &self.shadow.bind_group, &[(i as u64 * SHADOW_SLOT_STRIDE) as u32]);
+            pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+            pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+        }
+        unavailable
+    }
+
+    fn encode_camera_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        masks: bool,
+        timer: Option<&timing::FrameQueries>,
+    ) {
+        let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
+        let bg = self.options.background.as_dvec3();
+        let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
+            view: &targets.color.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
+                store: wgpu::StoreOp::Store,
+            },
+        })];
+        if masks {
+            color_attachments.push(Some(masks_attachment(&targets.masks.view)));
+        }
+        let timestamp_writes =
+            self.timer.as_ref().zip(timer).and_then(|(t, q)| t.pass_writes(q, timing::Stage::Camera, true, true));
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("lixel camera pass"),
+            color_attachments: &color_attachments,
+            depth_stencil_attachment: Some(depth_attachment(&targets.depth.view)),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(if masks { &self.passes.color_masks } else { &self.passes.color });
+        pass.set_bind_group(0, self.camera_bindings.bind_group.as_ref(), &[]);
+        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+        pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+    }
+
+    fn encode_analysis_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        staging: &wgpu::Buffer,
+        timer: Option<&timing::FrameQueries>,
+    ) {
+        let timestamp_writes =
+            self.timer.as_ref().zip(timer).and_then(|(t, q)| t.pass_writes(q, timing::Stage::Analysis, true, true));
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("lixel analysis pass"),
+                color_attachments: &[Some(masks_attachment(&self.analysis_masks.view))],
+                depth_stencil_attachment: Some(depth_attachment(&self.analysis_depth.view)),
+                timestamp_writes,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.passes.analysis);
+            pass.set_bind_group(0, self.analysis_bindings.bind_group.as_ref(), &[]);
+            pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+            pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+        }
+        let (w, h) = self.options.analysis_size;
+        encoder.copy_texture_to_buffer(
+            self.analysis_masks.texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(analysis::padded_row_bytes(w) as u32),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+    }
+}
+
+/// Masks attachment cleared to "background": depth 1.0's bits, no bits set.
+fn masks_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            // Integer targets take their clear value through f64; 1.0f32's
+            // bits (0x3f80_0000) are exact in f64.
+            load: wgpu::LoadOp::Clear(wgpu::Color { r: f64::from(1.0f32.to_bits()), g: 0.0, b: 0.0, a: 0.0 }),
+            store: wgpu::StoreOp::Store,
+        },
+    }
+}
+
+fn depth_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
+    }
+}
+
+fn check_target(width: u32, height: u32, max: u32) -> Result<(), RenderError> {
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(RenderError::TargetTooLarge { width, height, max });
+    }
+    Ok(())
+}

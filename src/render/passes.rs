@@ -1,0 +1,321 @@
+//! Pipelines and GPU resources of the three passes, one small struct each.
+
+use std::borrow::Cow;
+
+use super::uniforms::{ShadowPassRaw, VertexRaw, MAX_LIGHTS, SHADOW_SLOT_STRIDE};
+use super::ShadowBias;
+
+/// Depth format of shadow maps and camera depth buffers.
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Colour format of the camera pass: the shaders write linear colour.
+pub(crate) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Format of the per-pixel words (depth bits, shadow, facing, normal).
+pub(crate) const MASKS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+
+/// Shadow maps of one frame: at most the frame's lights plus the analysis
+/// pass's own lights.
+pub(crate) const MAX_SHADOW_SLOTS: usize = 2 * MAX_LIGHTS;
+
+fn scene_shader(device: &wgpu::Device, label: &str, source: &'static str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
+    })
+}
+
+/// The depth-only pass: four pipelines (depth test normal/reversed x depth
+/// clipped/unclipped) sharing one uniform buffer with a slot per light.
+pub(crate) struct ShadowPass {
+    /// Indexed by `reversed as usize * 2 + unclipped as usize`; `None` for
+    /// unclipped variants when the device lacks `DEPTH_CLIP_CONTROL`.
+    pipelines: [Option<wgpu::RenderPipeline>; 4],
+    pub(crate) uniforms: wgpu::Buffer,
+    pub(crate) bind_group: wgpu::BindGroup,
+}
+
+impl ShadowPass {
+    pub(crate) fn new(device: &wgpu::Device, bias: ShadowBias, unclipped_available: bool) -> Self {
+        let module = scene_shader(device, "lixel shadow shader", include_str!("../../shaders/shadow.wgsl"));
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lixel shadow bind group layout"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lixel shadow pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lixel shadow pass uniforms"),
+            size: SHADOW_SLOT_STRIDE * MAX_SHADOW_SLOTS as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lixel shadow bind group"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &uniforms,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
+                }),
+            }],
+        });
+        let pipelines = std::array::from_fn(|k| {
+            let (reversed, unclipped) = (k / 2 == 1, k % 2 == 1);
+            (!unclipped || unclipped_available).then(|| {
+                let label = format!(
+                    "lixel shadow pipeline ({}, {})",
+                    if reversed { "reversed depth" } else { "depth" },
+                    if unclipped { "unclipped" } else { "clipped" }
+                );
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(&label),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_shadow"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(VertexRaw::position_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        // Both faces: meshes from OBJ files need not be closed
+                        // or consistently wound, and the ray caster does the same.
+                        cull_mode: None,
+                        unclipped_depth: unclipped,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        // Reversed: greater is closer to the light.
+                        depth_compare: Some(if reversed {
+                            wgpu::CompareFunction::Greater
+                        } else {
+                            wgpu::CompareFunction::Less
+                        }),
+                        stencil: wgpu::StencilState::default(),
+                        bias: bias.depth_bias_state(reversed),
+                    }),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: None,
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+        });
+        Self { pipelines, uniforms, bind_group }
+    }
+
+    /// The pipeline for a light; `unclipped` falls back to clipped when
+    /// the device cannot do it (the returned flag says which was used).
+    pub(crate) fn pipeline(&self, reversed: bool, unclipped: bool) -> (&wgpu::RenderPipeline, bool) {
+        let base = usize::from(reversed) * 2;
+        match &self.pipelines[base + usize::from(unclipped)] {
+            Some(p) => (p, unclipped),
+            None => (self.pipelines[base].as_ref().expect("clipped pipelines always exist"), false),
+        }
+    }
+}
+
+/// The camera and analysis passes: same vertex stage and bindings,
+/// different fragment outputs.
+pub(crate) struct ScenePasses {
+    pub(crate) layout: wgpu::BindGroupLayout,
+    pub(crate) color: wgpu::RenderPipeline,
+    pub(crate) color_masks: wgpu::RenderPipeline,
+    pub(crate) analysis: wgpu::RenderPipeline,
+}
+
+impl ScenePasses {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        // WGSL has no includes: the shared declarations are prepended.
+        let camera_source = concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/camera.wgsl"));
+        let analysis_source =
+            concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/analysis.wgsl"));
+        let camera_module = scene_shader(device, "lixel camera shader", camera_source);
+        let analysis_module = scene_shader(device, "lixel analysis shader", analysis_source);
+        let uniform = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lixel scene bind group layout"),
+            entries: &[
+                uniform(0),
+                uniform(1),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lixel scene pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |label: &str, module: &wgpu::ShaderModule, entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VertexRaw::layout())],
+                },
+                // No culling, as in the shadow pass and the ray caster.
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let color_target = Some(wgpu::ColorTargetState::from(COLOR_FORMAT));
+        let masks_target = Some(wgpu::ColorTargetState::from(MASKS_FORMAT));
+        Self {
+            color: pipeline("lixel camera pipeline", &camera_module, "fs_color", &[color_target.clone()]),
+            color_masks: pipeline(
+                "lixel camera pipeline with masks",
+                &camera_module,
+                "fs_color_masks",
+                &[color_target, masks_target.clone()],
+            ),
+            analysis: pipeline("lixel analysis pipeline", &analysis_module, "fs_analysis", &[masks_target]),
+            layout,
+        }
+    }
+}
+
+/// A 2D texture with a default view.
+pub(crate) struct Target {
+    pub(crate) texture: wgpu::Texture,
+    pub(crate) view: wgpu::TextureView,
+}
+
+impl Target {
+    pub(crate) fn new(device: &wgpu::Device, label: &str, format: wgpu::TextureFormat, width: u32, height: u32) -> Self {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            label: Some(&format!("{label} view")),
+            ..Default::default()
+        });
+        Self { texture, view }
+    }
+}
+
+/// The camera pass's targets at one resolution.
+pub(crate) struct CameraTargets {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) color: Target,
+    pub(crate) masks: Target,
+    pub(crate) depth: Target,
+}
+
+impl CameraTargets {
+    pub(crate) fn new(device: &wgpu::Device, label: &str, width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            color: Target::new(device, &format!("{label} colour"), COLOR_FORMAT, width, height),
+            masks: Target::new(device, &format!("{label} masks"), MASKS_FORMAT, width, height),
+            depth: Target::new(device, &format!("{label} depth"), DEPTH_FORMAT, width, height),
+        }
+    }
+}
+
+/// Every light's shadow map: one layer each of a depth texture array whose
+/// layers are as large as the largest map (each map uses the top-left
+/// `width x height` texels of its layer).
+pub(crate) struct ShadowMaps {
+    pub(crate) texture: wgpu::Texture,
+    pub(crate) array_view: wgpu::TextureView,
+    pub(crate) layer_views: Vec<wgpu::TextureView>,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+}
+
+impl ShadowMaps {
+    pub(crate) fn new(device: &wgpu::Device, width: u32, height: u32, layers: u32) -> Self {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("lixel shadow maps"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let array_view = texture.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("lixel shadow maps array view"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let layer_views = (0..layers)
+            .map(|layer| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some(&format!("lixel shadow map layer {layer}")),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        Self { texture, array_view, layer_views, width, height }
+    }
+
+    pub(crate) fn layers(&self) -> u32 {
+        self.layer_views.len() as u32
+    }
+}

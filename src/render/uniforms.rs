@@ -1,0 +1,138 @@
+//! GPU-side layouts of the uniforms in `shaders/*.wgsl`, each built from its
+//! domain type with `to_raw`.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::{Camera, LightFrame, LightMatrix};
+
+/// Lights a camera or analysis pass can look up (the bit width of the masks).
+pub const MAX_LIGHTS: usize = 32;
+
+/// `Light::flags` bit: reversed depth test (see `common.wgsl`).
+pub(crate) const LIGHT_REVERSED_DEPTH: u32 = 1;
+
+/// Stride between the per-light slots of the shadow pass's uniform buffer:
+/// wgpu's default `min_uniform_buffer_offset_alignment`.
+pub(crate) const SHADOW_SLOT_STRIDE: u64 = 256;
+
+/// `Camera` in `common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct CameraRaw {
+    clip_from_world: [[f32; 4]; 4],
+    eye: [f32; 4],
+    params: [f32; 4],
+}
+
+impl CameraRaw {
+    pub(crate) fn to_raw(camera: &Camera, ambient: f32) -> Self {
+        Self {
+            clip_from_world: camera.clip_from_world().as_mat4().to_cols_array_2d(),
+            eye: camera.eye().as_vec3().extend(1.0).to_array(),
+            params: [ambient, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// `Light` in `common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct LightRaw {
+    clip_from_world: [[f32; 4]; 4],
+    position: [f32; 4],
+    color: [f32; 4],
+    map_size: [f32; 2],
+    layer: u32,
+    flags: u32,
+}
+
+impl LightRaw {
+    /// The light of `matrix`, whose map is in array layer `layer`.
+    pub(crate) fn to_raw(matrix: &LightMatrix, layer: u32, color: Vec3) -> Self {
+        // The point the light comes from, homogeneous: (p, 1) or (-d, 0).
+        let position = match matrix.frame {
+            LightFrame::Perspective { position, .. } => position.as_vec3().extend(1.0),
+            LightFrame::Orthographic { rotation } => (-rotation.row(2).as_vec3()).extend(0.0),
+        };
+        Self {
+            clip_from_world: matrix.clip_from_world_f32().to_cols_array_2d(),
+            position: position.to_array(),
+            color: color.extend(0.0).to_array(),
+            map_size: [matrix.map_size.width as f32, matrix.map_size.height as f32],
+            layer,
+            flags: if matrix.reverse_depth_test { LIGHT_REVERSED_DEPTH } else { 0 },
+        }
+    }
+}
+
+/// `Lights` in `common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct LightsRaw {
+    count: u32,
+    _pad: [u32; 3],
+    items: [LightRaw; MAX_LIGHTS],
+}
+
+impl LightsRaw {
+    /// Up to [`MAX_LIGHTS`] lights (the caller checks the count).
+    pub(crate) fn to_raw(lights: &[LightRaw]) -> Self {
+        let mut raw = Self::zeroed();
+        let n = lights.len().min(MAX_LIGHTS);
+        raw.count = n as u32;
+        raw.items[..n].copy_from_slice(&lights[..n]);
+        raw
+    }
+}
+
+/// `ShadowPass` in `shadow.wgsl`, padded to its dynamic-offset slot.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct ShadowPassRaw {
+    clip_from_world: [[f32; 4]; 4],
+    _pad: [f32; 48],
+}
+
+impl ShadowPassRaw {
+    pub(crate) fn to_raw(clip_from_world: Mat4) -> Self {
+        Self { clip_from_world: clip_from_world.to_cols_array_2d(), _pad: [0.0; 48] }
+    }
+}
+
+/// One vertex of the scene buffer: position, normal, albedo (sRGB-agnostic
+/// linear bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct VertexRaw {
+    pub(crate) position: [f32; 3],
+    pub(crate) normal: [f32; 3],
+    pub(crate) albedo: [u8; 4],
+}
+
+impl VertexRaw {
+    pub(crate) const ATTRIBUTES: [wgpu::VertexAttribute; 3] =
+        wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4];
+
+    /// The layout with all three attributes (camera and analysis passes).
+    pub(crate) fn layout() -> wgpu::VertexBufferLayout<'static> {
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Self>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &Self::ATTRIBUTES,
+        }
+    }
+
+    /// The layout with the position only (shadow pass).
+    pub(crate) fn position_layout() -> wgpu::VertexBufferLayout<'static> {
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Self>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &Self::ATTRIBUTES[..1],
+        }
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<ShadowPassRaw>() as u64 == SHADOW_SLOT_STRIDE);
+const _: () = assert!(std::mem::size_of::<LightRaw>() == 112);
+const _: () = assert!(std::mem::size_of::<VertexRaw>() == 28);
