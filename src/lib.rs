@@ -38,6 +38,8 @@
 
 mod camera;
 mod error;
+#[cfg(feature = "render")]
+pub mod experiment;
 pub mod fit;
 pub mod geometry;
 mod light;

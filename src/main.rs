@@ -1,68 +1,248 @@
-//! The `lixel` command line.
-//!
-//! `lixel methods` computes every classical light matrix for the built-in
-//! default configuration (a viewer just above a floor with objects on it, one
-//! light) and prints how well each one samples the visible floor (one sample per pixel of a grid over the screen).
+//! The `lixel` command line: `lixel experiment` (the misclassification
+//! experiment, the project's main job) and `lixel methods` (every classical
+//! matrix on one configuration, scored).
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
+use clap::{Parser, Subcommand, ValueEnum};
 use glam::{DVec3, UVec2};
+use lixel::experiment::{
+    self, ExperimentConfig, LightKind, MethodKind, Preset, Progress, SceneSource, TimingOptions, Truth,
+};
+use lixel::render::Renderer;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
-const USAGE: &str = "\
-usage: lixel methods [--light x,y,z] [--point] [--map N] [--samples N]
+#[derive(Parser)]
+#[command(name = "lixel", version, about = "Light matrices that give every screen pixel as much shadow-map resolution as possible")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
 
-Computes every classical light matrix (normal, focused, PSM, LiSPSM,
-plane-optimal) for the built-in walkthrough configuration and prints the
-badness (screen pixels per texel, squared; lower is better) they give on the
-visible floor (one sample per pixel of a grid over the screen).
+#[derive(Subcommand)]
+enum Command {
+    /// Count misclassified shadow pixels of every method against exact ground
+    /// truth (Chong & Gortler 2006, Table 1) and write a report directory.
+    Experiment(ExperimentArgs),
+    /// Compute every classical matrix for one walkthrough configuration and
+    /// print how well each samples the visible floor (badness: screen pixels
+    /// per texel, squared; lower is better).
+    Methods(MethodsArgs),
+}
 
-  --light x,y,z   light direction (directional) or position (--point); default 0.4,-1,0.2
-  --point         make the light a point light at --light
-  --map N         shadow-map size N x N (default 400)
-  --samples N     pixel grid N x N for the floor samples (default 200)
+#[derive(Clone, Copy, ValueEnum)]
+enum PresetArg {
+    /// Small enough for CI (seconds to a minute).
+    Quick,
+    /// The main job: a few minutes on a 2-core machine.
+    Default,
+    /// The paper's setting: 1.1M triangles, 500 lights, 750² screen, 400² maps.
+    Paper,
+}
 
-The last row, psm+readback, is PSM with its near plane pushed out to the
-nearest visible floor point, as a depth readback would allow.";
+#[derive(Clone, Copy, ValueEnum)]
+enum LightArg {
+    /// Point lights on a distant hemisphere (the paper's setting).
+    Point,
+    /// Directional (sun-like) lights from the hemisphere.
+    Directional,
+}
 
-struct Args {
+#[derive(Clone, Copy, ValueEnum)]
+enum TruthArg {
+    /// Exact ray casting against every triangle.
+    Raytrace,
+    /// The paper's focused 4000x4000 map.
+    Focused4000,
+    /// Both; counts use ray casting, the report gives their agreement.
+    Both,
+}
+
+#[derive(clap::Args)]
+struct ExperimentArgs {
+    /// Starting point for every setting below.
+    #[arg(long, value_enum, default_value = "default")]
+    preset: PresetArg,
+    /// Light kind.
+    #[arg(long, value_enum)]
+    light: Option<LightArg>,
+    /// An OBJ file instead of the built-in scene.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Triangle budget of the built-in scene.
+    #[arg(long)]
+    triangles: Option<usize>,
+    /// Eye position x,y,z (default: a little above the floor at the scene's edge).
+    #[arg(long, value_parser = parse_vec3)]
+    eye: Option<DVec3>,
+    /// Look-at point x,y,z (default: the scene centre).
+    #[arg(long, value_parser = parse_vec3)]
+    target: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long)]
+    fov: Option<f64>,
+    /// Number of configurations (light positions).
+    #[arg(long)]
+    configs: Option<usize>,
+    /// Seed of the light positions.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Square screen resolution.
+    #[arg(long)]
+    screen: Option<u32>,
+    /// Square shadow-map resolution.
+    #[arg(long)]
+    map: Option<u32>,
+    /// Comma-separated methods: normal, focused, lispsm, psm, plane-optimal, optimized, optimized-argmin.
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    /// Ground truth.
+    #[arg(long, value_enum)]
+    truth: Option<TruthArg>,
+    /// Configurations for the resolution equivalence (0 turns it off).
+    #[arg(long)]
+    equivalence: Option<usize>,
+    /// Report directory.
+    #[arg(long, default_value = "report")]
+    out: PathBuf,
+    /// Continue an interrupted run in --out without redoing finished configurations.
+    #[arg(long)]
+    resume: bool,
+    /// Measure the frame-time table (the paper's Table 2) instead.
+    #[arg(long)]
+    timing: bool,
+    /// Frames timed per cell of the timing table.
+    #[arg(long, default_value_t = 30)]
+    timing_frames: usize,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(clap::Args)]
+struct MethodsArgs {
+    /// Light direction (directional) or position (--point), x,y,z.
+    #[arg(long, value_parser = parse_vec3, default_value = "0.4,-1,0.2", allow_hyphen_values = true)]
     light: DVec3,
+    /// Make the light a point light at --light.
+    #[arg(long)]
     point: bool,
+    /// Shadow-map size N x N.
+    #[arg(long, default_value_t = 400)]
     map: u32,
-    samples: usize,
+    /// Pixel grid N x N for the floor samples.
+    #[arg(long, default_value_t = 200)]
+    samples: u32,
 }
 
-fn parse(mut args: impl Iterator<Item = String>) -> Result<Args, String> {
-    match args.next().as_deref() {
-        Some("methods") => {}
-        Some("-h" | "--help") | None => return Err(String::new()),
-        Some(other) => return Err(format!("unknown command {other:?}")),
+fn parse_vec3(s: &str) -> Result<DVec3, String> {
+    let v: Vec<f64> = s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| e.to_string())).collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] => Ok(DVec3::new(x, y, z)),
+        _ => Err("expected x,y,z".into()),
     }
-    let mut parsed = Args { light: DVec3::new(0.4, -1.0, 0.2), point: false, map: 400, samples: 200 };
-    while let Some(flag) = args.next() {
-        let mut value = || args.next().ok_or_else(|| format!("{flag} needs a value"));
-        match flag.as_str() {
-            "--light" => {
-                let v: Vec<f64> = value()?
-                    .split(',')
-                    .map(str::parse)
-                    .collect::<Result<_, _>>()
-                    .map_err(|e| format!("--light: {e}"))?;
-                let [x, y, z] = v[..] else { return Err("--light needs x,y,z".into()) };
-                parsed.light = DVec3::new(x, y, z);
-            }
-            "--point" => parsed.point = true,
-            "--map" => parsed.map = value()?.parse().map_err(|e| format!("--map: {e}"))?,
-            "--samples" => parsed.samples = value()?.parse().map_err(|e| format!("--samples: {e}"))?,
-            "-h" | "--help" => return Err(String::new()),
-            other => return Err(format!("unknown flag {other:?}")),
+}
+
+fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> {
+    let mut c = ExperimentConfig::preset(match args.preset {
+        PresetArg::Quick => Preset::Quick,
+        PresetArg::Default => Preset::Default,
+        PresetArg::Paper => Preset::Paper,
+    });
+    if let Some(l) = args.light {
+        c.light = match l {
+            LightArg::Point => LightKind::Point,
+            LightArg::Directional => LightKind::Directional,
+        };
+    }
+    if let Some(path) = &args.scene {
+        c.scene = SceneSource::Obj(path.clone());
+    } else if let Some(t) = args.triangles {
+        c.scene = SceneSource::Builtin { triangles: t };
+    }
+    c.eye = args.eye.or(c.eye);
+    c.target = args.target.or(c.target);
+    c.fov_y_degrees = args.fov.unwrap_or(c.fov_y_degrees);
+    c.configs = args.configs.unwrap_or(c.configs);
+    c.seed = args.seed.unwrap_or(c.seed);
+    c.screen = args.screen.unwrap_or(c.screen);
+    c.map = args.map.unwrap_or(c.map);
+    if let Some(names) = &args.methods {
+        c.methods = names
+            .iter()
+            .map(|n| MethodKind::parse(n).ok_or_else(|| format!("unknown method {n:?}")))
+            .collect::<Result<_, _>>()?;
+    }
+    if let Some(t) = args.truth {
+        c.truth = match t {
+            TruthArg::Raytrace => Truth::RayCast,
+            TruthArg::Focused4000 => Truth::Focused4000,
+            TruthArg::Both => Truth::Both,
+        };
+    }
+    c.equivalence_configs = args.equivalence.unwrap_or(c.equivalence_configs);
+    c.out.clone_from(&args.out);
+    c.resume = args.resume;
+    Ok(c)
+}
+
+/// A device and queue from the system's adapter (lavapipe on machines without a GPU).
+fn gpu() -> Result<(wgpu::Device, wgpu::Queue), String> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+        .map_err(|e| format!("no GPU adapter ({e}); on Debian install mesa-vulkan-drivers"))?;
+    let mut limits = wgpu::Limits::default();
+    // The focused 4000² truth needs more than the default 8192 texture limit allows... and room.
+    limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
+    pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("lixel"),
+        required_features: adapter.features() & Renderer::optional_features(),
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .map_err(|e| format!("cannot open the GPU device: {e}"))
+}
+
+fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
+    let config = experiment_config(args)?;
+    let (device, queue) = gpu()?;
+    if args.timing {
+        let options = TimingOptions { frames: args.timing_frames, ..Default::default() };
+        eprintln!("timing {} cells of {} frames on {:?}...", options.lights.len() * options.maps.len(), options.frames, config.scene);
+        let rows = experiment::run_timing(&config, &options, &device, &queue).map_err(|e| e.to_string())?;
+        let table = experiment::timing_markdown(&rows);
+        std::fs::create_dir_all(&config.out).map_err(|e| e.to_string())?;
+        let path = config.out.join("timing.md");
+        std::fs::write(&path, &table).map_err(|e| format!("{}: {e}", path.display()))?;
+        println!("{table}\n(written to {})", path.display());
+        return Ok(());
+    }
+    let bar = (!args.quiet).then(|| {
+        let bar = indicatif::ProgressBar::new(config.configs as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} configurations, ETA {eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let mut progress = |p: Progress| {
+        if let Some(bar) = &bar {
+            bar.set_position(p.done as u64);
         }
+    };
+    let summary = experiment::run(&config, &device, &queue, &mut progress).map_err(|e| e.to_string())?;
+    if let Some(bar) = bar {
+        bar.finish();
     }
-    Ok(parsed)
+    let report = std::fs::read_to_string(config.out.join("report.md")).unwrap_or_default();
+    println!("{report}");
+    eprintln!("report in {} ({:.1} s)", config.out.display(), summary.elapsed.as_secs_f64());
+    Ok(())
 }
 
-fn run(args: &Args) -> Result<(), lixel::LixelError> {
+fn run_methods(args: &MethodsArgs) -> Result<(), String> {
     // The paper's walkthrough: viewer a little above a floor with objects on it.
     let camera = Camera::look_at(
         DVec3::new(0.0, 1.7, 20.0),
@@ -72,24 +252,19 @@ fn run(args: &Args) -> Result<(), lixel::LixelError> {
         UVec2::new(750, 750),
         0.1,
         200.0,
-    )?;
+    )
+    .map_err(|e| e.to_string())?;
     let floor = Aabb::from_corners(DVec3::new(-40.0, 0.0, -40.0), DVec3::new(40.0, 0.0, 40.0));
     let objects = Aabb::from_corners(DVec3::new(-30.0, 0.0, -30.0), DVec3::new(30.0, 6.0, 30.0));
     let bounds = SceneBounds { casters: objects, receivers: objects.union(&floor) };
     let light = if args.point { Light::point(args.light) } else { Light::directional(args.light) };
-    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(args.map))?;
-
-    let n = u32::try_from(args.samples.max(2)).unwrap_or(u32::MAX);
+    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(args.map)).map_err(|e| e.to_string())?;
+    let n = args.samples.max(2);
     let floor_plane = lixel::geometry::Plane::from_point_normal(DVec3::ZERO, DVec3::Y);
     let floor_samples = plane_samples(&camera, &floor_plane, &floor, UVec2::new(n, n));
     // What a depth readback would supply to PSM: the nearest visible receiver.
     let nearest = floor_samples.iter().map(|(p, _)| camera.view_depth(*p)).fold(f64::INFINITY, f64::min);
-    println!(
-        "{} floor samples (one per pixel of a {n}x{n} grid), {}x{} map, {light:?}",
-        floor_samples.len(),
-        args.map,
-        args.map
-    );
+    println!("{} floor samples (one per pixel of a {n}x{n} grid), {}x{} map, {light:?}", floor_samples.len(), args.map, args.map);
     println!("{:<15} {:>12} {:>12} {:>12}  fallback", "method", "median b", "mean b", "max b");
     let psm_near = Parameterization::Psm(PsmOptions { min_view_depth: nearest.is_finite().then_some(nearest) });
     let methods = Parameterization::ALL_DEFAULT.iter().map(|p| (p.method().name(), *p));
@@ -108,17 +283,12 @@ fn run(args: &Args) -> Result<(), lixel::LixelError> {
 }
 
 fn main() -> ExitCode {
-    let args = match parse(std::env::args().skip(1)) {
-        Ok(args) => args,
-        Err(message) => {
-            if !message.is_empty() {
-                eprintln!("error: {message}\n");
-            }
-            eprintln!("{USAGE}");
-            return if message.is_empty() { ExitCode::SUCCESS } else { ExitCode::from(2) };
-        }
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Experiment(args) => run_experiment(args),
+        Command::Methods(args) => run_methods(args),
     };
-    match run(&args) {
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");

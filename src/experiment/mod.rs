@@ -1,0 +1,643 @@
+//! The misclassification experiment of Chong & Gortler 2006, section 3
+//! (their Table 1), made a tool: for many light positions, render the shadow
+//! of every method at the same map resolution and count the screen pixels
+//! whose shadow bit differs from exact ground truth.
+//!
+//! One configuration (a light position) runs:
+//!
+//! 1. ground truth: a ray from every visible pixel's surface point to the
+//!    light against all triangles ([`RayCaster`]), and/or the paper's
+//!    focused 4000² map;
+//! 2. every method's matrix (scene-optimized ones through the frame loop at
+//!    the fixed configuration until the optimizer stops switching);
+//! 3. the camera pass's full-resolution masks; a pixel counts when it is
+//!    visible, on a receiver facing the light, and its bit differs from the
+//!    truth. One bias policy ([`ShadowBias`](crate::render::ShadowBias)'s
+//!    default) serves every method.
+
+mod images;
+mod report;
+mod timing;
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use glam::{DVec3, UVec2};
+
+use crate::mesh::{RayCaster, Scene, ShadowMasks};
+use crate::optimize::{OptimizeOptions, Optimizer, Readback, SampleOptions, SearchStrategy};
+use crate::render::{AnalysisReadback, AnalysisRequest, Frame, RenderError, Renderer, RendererOptions};
+use crate::{Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, Samples, ShadowMapSize, ShadowProblem};
+
+pub use images::error_overlay;
+pub use report::{markdown, ConfigRow, MethodSummary, Summary};
+pub use timing::{run_timing, timing_markdown, TimingOptions, TimingRow};
+
+/// A method of the experiment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum MethodKind {
+    /// Uniform around all receivers.
+    Normal,
+    /// Uniform around the visible receivers.
+    Focused,
+    /// Light-space perspective.
+    LiSpsm,
+    /// Perspective shadow maps (near plane from the nearest visible depth).
+    Psm,
+    /// Perfect sampling on the floor plane.
+    PlaneOptimal,
+    /// Scene-optimized, the paper's search.
+    Optimized,
+    /// Scene-optimized with argmin's Nelder–Mead.
+    OptimizedArgmin,
+}
+
+impl MethodKind {
+    /// Every method, in report order.
+    pub const ALL: [Self; 7] =
+        [Self::Normal, Self::Focused, Self::LiSpsm, Self::Psm, Self::PlaneOptimal, Self::Optimized, Self::OptimizedArgmin];
+
+    /// Name used on the command line and in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Normal => "normal",
+            Self::Focused => "focused",
+            Self::LiSpsm => "lispsm",
+            Self::Psm => "psm",
+            Self::PlaneOptimal => "plane-optimal",
+            Self::Optimized => "optimized",
+            Self::OptimizedArgmin => "optimized-argmin",
+        }
+    }
+
+    /// Parses [`name`](Self::name).
+    #[must_use]
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// Which ground truth the counts use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Truth {
+    /// Exact ray casting (independent of every method). The default.
+    RayCast,
+    /// The paper's reference: a focused 4000x4000 map.
+    Focused4000,
+    /// Count against ray casting and also report how often the two disagree.
+    Both,
+}
+
+/// Point lights on a distant hemisphere, or directional lights from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    /// Point lights (the paper's setting).
+    Point,
+    /// Directional lights (sun-like).
+    Directional,
+}
+
+/// Where the scene comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneSource {
+    /// The procedural scene with this triangle budget.
+    Builtin {
+        /// Triangle budget.
+        triangles: usize,
+    },
+    /// An OBJ file.
+    Obj(PathBuf),
+}
+
+/// Everything an experiment run depends on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExperimentConfig {
+    /// The scene.
+    pub scene: SceneSource,
+    /// Eye position; `None`: a little above the floor at the scene's edge.
+    pub eye: Option<DVec3>,
+    /// Look-at point; `None`: the scene centre, slightly above the floor.
+    pub target: Option<DVec3>,
+    /// Vertical field of view in degrees.
+    pub fov_y_degrees: f64,
+    /// Light kind.
+    pub light: LightKind,
+    /// Radius of the light hemisphere, in scene diagonals.
+    pub light_distance: f64,
+    /// Number of configurations (light positions).
+    pub configs: usize,
+    /// Seed of the light positions.
+    pub seed: u64,
+    /// Square screen resolution.
+    pub screen: u32,
+    /// Square shadow-map resolution.
+    pub map: u32,
+    /// Methods to compare.
+    pub methods: Vec<MethodKind>,
+    /// Ground truth.
+    pub truth: Truth,
+    /// Most frames the scene-optimized frame loop may take to settle.
+    pub max_optimize_frames: usize,
+    /// Resolution equivalence on the first this-many configurations (0: off).
+    pub equivalence_configs: usize,
+    /// Focused map resolutions tried for the equivalence.
+    pub equivalence_ladder: Vec<u32>,
+    /// Report directory.
+    pub out: PathBuf,
+    /// Continue an interrupted run.
+    pub resume: bool,
+}
+
+/// Named presets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// Small enough for CI (well under two minutes).
+    Quick,
+    /// The main job: minutes on a 2-core machine.
+    Default,
+    /// The paper's setting: 1.1M triangles, 500 point lights, 750² screen, 400² maps.
+    Paper,
+}
+
+impl ExperimentConfig {
+    /// The configuration of a preset.
+    #[must_use]
+    pub fn preset(preset: Preset) -> Self {
+        let base = Self {
+            scene: SceneSource::Builtin { triangles: 200_000 },
+            eye: None,
+            target: None,
+            fov_y_degrees: 60.0,
+            light: LightKind::Point,
+            light_distance: 5.0,
+            configs: 40,
+            seed: 2006,
+            screen: 512,
+            map: 400,
+            methods: MethodKind::ALL.to_vec(),
+            truth: Truth::Both,
+            max_optimize_frames: 12,
+            equivalence_configs: 10,
+            equivalence_ladder: vec![400, 500, 640, 800, 1000, 1250, 1600, 2000, 2500, 3200, 4000],
+            out: PathBuf::from("report"),
+            resume: false,
+        };
+        match preset {
+            Preset::Default => base,
+            Preset::Quick => Self {
+                scene: SceneSource::Builtin { triangles: 8_000 },
+                configs: 6,
+                screen: 192,
+                map: 256,
+                truth: Truth::Both,
+                max_optimize_frames: 6,
+                equivalence_configs: 2,
+                equivalence_ladder: vec![256, 512, 1024],
+                ..base
+            },
+            Preset::Paper => Self {
+                scene: SceneSource::Builtin { triangles: 1_137_772 },
+                configs: 500,
+                screen: 750,
+                map: 400,
+                truth: Truth::RayCast,
+                equivalence_configs: 50,
+                ..base
+            },
+        }
+    }
+}
+
+/// Why an experiment stopped.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExperimentError {
+    /// The scene could not be loaded.
+    #[error("scene: {0}")]
+    Scene(String),
+    /// The renderer failed.
+    #[error("renderer: {0}")]
+    Render(#[from] RenderError),
+    /// Reading or writing the report failed.
+    #[error("report {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A configuration is invalid.
+    #[error("configuration: {0}")]
+    Config(String),
+    /// The camera or a light is invalid.
+    #[error("solver: {0}")]
+    Solver(#[from] LixelError),
+}
+
+/// Progress of a run, for a progress bar.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Configurations finished (resumed ones included).
+    pub done: usize,
+    /// Configurations in total.
+    pub total: usize,
+}
+
+/// Loads the configured scene.
+///
+/// # Errors
+/// [`ExperimentError::Scene`] for an unreadable or invalid OBJ file.
+pub fn load_scene(source: &SceneSource) -> Result<Scene, ExperimentError> {
+    match source {
+        SceneSource::Builtin { triangles } => {
+            Ok(crate::mesh::ProceduralScene { triangle_budget: *triangles, ..Default::default() }.build())
+        }
+        SceneSource::Obj(path) => crate::mesh::load_obj(path).map_err(|e| ExperimentError::Scene(e.to_string())),
+    }
+}
+
+/// The fixed camera of the experiment for `scene`.
+///
+/// # Errors
+/// [`ExperimentError::Solver`] for a degenerate camera.
+pub fn camera_for(config: &ExperimentConfig, scene: &Scene) -> Result<Camera, ExperimentError> {
+    let bounds = scene.bounds().scene();
+    let center = bounds.center();
+    let extent = bounds.max - bounds.min;
+    let floor = bounds.min.y;
+    // A little above the floor near the scene's front edge, looking across it.
+    let eye = config.eye.unwrap_or(DVec3::new(center.x, floor + 0.025 * extent.x.max(extent.z), bounds.max.z * 0.95));
+    let target = config.target.unwrap_or(DVec3::new(center.x, floor + 0.01 * extent.x.max(extent.z), center.z));
+    let far = 2.0 * bounds.diagonal().max(1e-6);
+    Ok(Camera::look_at(
+        eye,
+        target,
+        DVec3::Y,
+        config.fov_y_degrees.to_radians(),
+        UVec2::splat(config.screen),
+        far * 1e-3,
+        far,
+    )?)
+}
+
+/// The light of configuration `index`: uniform on the upper hemisphere around
+/// the scene centre (seeded per index, so any subset is reproducible).
+#[must_use]
+pub fn light_for(config: &ExperimentConfig, scene: &Scene, index: usize) -> Light {
+    let bounds = scene.bounds().scene();
+    let mut state = config.seed ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut next = || {
+        // SplitMix64.
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    // Uniform on the hemisphere: y uniform in (0, 1], azimuth uniform.
+    let y = 1.0 - next();
+    let phi = std::f64::consts::TAU * next();
+    let r = (1.0 - y * y).max(0.0).sqrt();
+    let dir = DVec3::new(r * phi.cos(), y.max(1e-3), r * phi.sin()).normalize();
+    match config.light {
+        LightKind::Point => Light::point(bounds.center() + dir * (config.light_distance * bounds.diagonal())),
+        LightKind::Directional => Light::directional(-dir),
+    }
+}
+
+/// One method's result on one configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodResult {
+    /// The matrix used (`None` when the method failed).
+    pub matrix: Option<LightMatrix>,
+    /// Counts against the truth.
+    pub counts: Option<Counts>,
+    /// Frames the scene-optimized loop took (1 for the others).
+    pub frames: usize,
+    /// Fallback or error text.
+    pub note: String,
+}
+
+/// Misclassification counts of one method on one configuration.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Pixels counted (visible and light-facing in the truth).
+    pub counted: u64,
+    /// Pixels lit in the truth but shadowed by the method.
+    pub false_shadow: u64,
+    /// Pixels shadowed in the truth but lit by the method.
+    pub false_lit: u64,
+}
+
+impl Counts {
+    /// `false_shadow + false_lit`.
+    #[must_use]
+    pub fn misclassified(&self) -> u64 {
+        self.false_shadow + self.false_lit
+    }
+
+    /// Compares `masks` with `truth` for light 0.
+    #[must_use]
+    pub fn compare(masks: &ShadowMasks, truth: &ShadowMasks) -> Self {
+        let mut c = Self::default();
+        for i in 0..truth.depth.len().min(masks.depth.len()) {
+            if !truth.visible(i) || truth.facing[i] & 1 == 0 {
+                continue;
+            }
+            c.counted += 1;
+            match (truth.shadow[i] & 1, masks.shadow[i] & 1) {
+                (0, 1) => c.false_shadow += 1,
+                (1, 0) => c.false_lit += 1,
+                _ => {}
+            }
+        }
+        c
+    }
+}
+
+/// A running experiment: the scene on the GPU, the ray caster, the camera.
+pub struct Runner<'a> {
+    config: &'a ExperimentConfig,
+    scene: Scene,
+    camera: Camera,
+    caster: Option<RayCaster>,
+    renderer: Renderer,
+}
+
+impl std::fmt::Debug for Runner<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Runner").field("config", self.config).field("camera", &self.camera).finish_non_exhaustive()
+    }
+}
+
+/// Everything one configuration produced.
+#[derive(Clone, Debug)]
+pub struct ConfigOutcome {
+    /// The light.
+    pub light: Light,
+    /// Per method, in the config's method order.
+    pub results: Vec<(MethodKind, MethodResult)>,
+    /// Pixels where the two truths disagree (when both were computed), and pixels compared.
+    pub truth_disagreement: Option<(u64, u64)>,
+    /// Wall time of the configuration.
+    pub elapsed: Duration,
+}
+
+impl<'a> Runner<'a> {
+    /// Loads the scene, builds the ray caster and the renderer.
+    ///
+    /// # Errors
+    /// Scene, camera or renderer failures.
+    pub fn new(config: &'a ExperimentConfig, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Self, ExperimentError> {
+        if config.configs == 0 || config.screen == 0 || config.map == 0 || config.methods.is_empty() {
+            return Err(ExperimentError::Config("configs, screen, map and methods must be non-empty".into()));
+        }
+        let scene = load_scene(&config.scene)?;
+        let camera = camera_for(config, &scene)?;
+        let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
+        let options = RendererOptions { readback_slots: 2, ..RendererOptions::default() };
+        let renderer = Renderer::new(device, queue, &scene, options)?;
+        Ok(Self { config, scene, camera, caster, renderer })
+    }
+
+    /// The camera.
+    #[must_use]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The scene.
+    #[must_use]
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The problem of one light at map size `map`.
+    ///
+    /// # Errors
+    /// Invalid lights (never for the hemisphere's).
+    pub fn problem(&self, light: Light, map: u32) -> Result<ShadowProblem, LixelError> {
+        ShadowProblem::new(self.camera, light, self.scene.bounds(), ShadowMapSize::square(map))
+    }
+
+    /// Renders the camera view with `matrix` and reads back its masks.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn masks(&mut self, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
+        let report =
+            self.renderer.render(&Frame { camera: &self.camera, lights: std::slice::from_ref(matrix), masks: true, analysis: None })?;
+        self.renderer.wait_for(&report.submission)?;
+        Ok(self.renderer.read_masks()?)
+    }
+
+    /// The camera's color image with `matrix` (for the report's pictures).
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn color(&mut self, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
+        let report =
+            self.renderer.render(&Frame { camera: &self.camera, lights: std::slice::from_ref(matrix), masks: true, analysis: None })?;
+        self.renderer.wait_for(&report.submission)?;
+        Ok(self.renderer.read_color()?)
+    }
+
+    /// Ground truth for `light`: ray cast, or the focused 4000² map.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn truths(&mut self, light: Light) -> Result<(Option<ShadowMasks>, Option<ShadowMasks>), ExperimentError> {
+        let size = self.config.screen;
+        let ray = self.caster.as_ref().map(|c| c.trace_masks(&self.camera, &[light], size, size));
+        let focused = if matches!(self.config.truth, Truth::Focused4000 | Truth::Both) {
+            let m = self.problem(light, 4000)?.solve(&Parameterization::Focused)?;
+            Some(self.masks(&m)?)
+        } else {
+            None
+        };
+        Ok((ray, focused))
+    }
+
+    /// The matrix of one method (scene-optimized: through the frame loop).
+    /// Returns the matrix, the frames it took and a note.
+    fn matrix(&mut self, method: MethodKind, problem: &ShadowProblem, nearest: Option<f64>) -> Result<(LightMatrix, usize, String), ExperimentError> {
+        let p = match method {
+            MethodKind::Normal => Parameterization::Normal,
+            MethodKind::Focused => Parameterization::Focused,
+            MethodKind::LiSpsm => Parameterization::LiSpsm(Default::default()),
+            MethodKind::Psm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
+            MethodKind::PlaneOptimal => Parameterization::PlaneOptimal(Default::default()),
+            MethodKind::Optimized | MethodKind::OptimizedArgmin => {
+                let strategy = if method == MethodKind::Optimized {
+                    SearchStrategy::Paper
+                } else {
+                    SearchStrategy::NelderMead { max_iterations: 150 }
+                };
+                return self.settle(problem, strategy);
+            }
+        };
+        let m = problem.solve(&p)?;
+        let note = m.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
+        Ok((m, 1, note))
+    }
+
+    /// The scene-optimized frame loop at a fixed configuration: start from
+    /// the focused map; each frame renders the analysis pass with the current
+    /// matrix, reads it back and optimizes; stop when the optimizer keeps the
+    /// previous matrix (no 20% median improvement) or after the frame cap.
+    fn settle(&mut self, problem: &ShadowProblem, strategy: SearchStrategy) -> Result<(LightMatrix, usize, String), ExperimentError> {
+        let mut optimizer = Optimizer::new(OptimizeOptions { strategy, ..Default::default() });
+        let mut matrix = problem.solve(&Parameterization::Focused)?;
+        let mut note = String::new();
+        for frame in 1..=self.config.max_optimize_frames.max(1) {
+            let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
+            let report = self.renderer.render(&Frame {
+                camera: &self.camera,
+                lights: std::slice::from_ref(&matrix),
+                masks: false,
+                analysis,
+            })?;
+            self.renderer.wait_for(&report.submission)?;
+            let readback = loop {
+                if let Some(r) = self.renderer.try_take_analysis() {
+                    break r;
+                }
+                self.renderer.wait_idle()?;
+            };
+            let (bits, normals) = optimizer_inputs(&readback);
+            let input = Readback {
+                width: readback.masks.width,
+                height: readback.masks.height,
+                depth: &readback.masks.depth,
+                shadow_bits: &bits,
+                normals: Some(&normals),
+            };
+            let samples = Samples::from_readback(problem, &input, 0, &SampleOptions::default())?;
+            let result = optimizer.optimize(&samples, Some(&matrix))?;
+            note = result.report.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
+            matrix = result.matrix;
+            if !result.report.accepted || result.report.fallback.is_some() {
+                return Ok((matrix, frame, note));
+            }
+        }
+        Ok((matrix, self.config.max_optimize_frames.max(1), note))
+    }
+
+    /// Runs configuration `index`.
+    ///
+    /// # Errors
+    /// Renderer and solver failures that are not a method's own (a method's
+    /// error is recorded in its result).
+    pub fn run_config(&mut self, index: usize) -> Result<ConfigOutcome, ExperimentError> {
+        let start = Instant::now();
+        let light = light_for(self.config, &self.scene, index);
+        let (ray, focused_truth) = self.truths(light)?;
+        let truth_disagreement = match (&ray, &focused_truth) {
+            (Some(a), Some(b)) => {
+                let c = Counts::compare(b, a);
+                Some((c.misclassified(), c.counted))
+            }
+            _ => None,
+        };
+        let truth = ray.or(focused_truth).ok_or_else(|| ExperimentError::Config("no ground truth".into()))?;
+        // What a depth readback supplies to PSM: the nearest visible depth.
+        let nearest = nearest_view_depth(&self.camera, &truth);
+        let problem = self.problem(light, self.config.map)?;
+        let mut results = Vec::new();
+        for &method in &self.config.methods {
+            let result = match self.matrix(method, &problem, nearest) {
+                Ok((m, frames, note)) => {
+                    let masks = self.masks(&m)?;
+                    MethodResult { matrix: Some(m), counts: Some(Counts::compare(&masks, &truth)), frames, note }
+                }
+                Err(ExperimentError::Solver(e)) => MethodResult { matrix: None, counts: None, frames: 0, note: e.to_string() },
+                Err(e) => return Err(e),
+            };
+            results.push((method, result));
+        }
+        Ok(ConfigOutcome { light, results, truth_disagreement, elapsed: start.elapsed() })
+    }
+
+    /// Mean misclassified pixels of `method` at map size `map` over the first
+    /// `count` configurations (the resolution-equivalence measurements).
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn mean_at_resolution(&mut self, method: MethodKind, map: u32, count: usize) -> Result<f64, ExperimentError> {
+        let mut total = 0.0;
+        let mut n = 0usize;
+        for index in 0..count {
+            let light = light_for(self.config, &self.scene, index);
+            let (ray, focused_truth) = self.truths(light)?;
+            let Some(truth) = ray.or(focused_truth) else { continue };
+            let nearest = nearest_view_depth(&self.camera, &truth);
+            let problem = self.problem(light, map)?;
+            if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
+                total += Counts::compare(&self.masks(&m)?, &truth).misclassified() as f64;
+                n += 1;
+            }
+        }
+        Ok(if n == 0 { f64::NAN } else { total / n as f64 })
+    }
+}
+
+/// The analysis pass's bits as the optimizer wants them: "not lit by light
+/// i" (shadowed, or facing away as a shadow-map test finds it), and unpacked
+/// normals.
+fn optimizer_inputs(readback: &AnalysisReadback) -> (Vec<u32>, Vec<[f32; 3]>) {
+    let masks = &readback.masks;
+    let bits = masks
+        .shadow
+        .iter()
+        .zip(&masks.facing)
+        .enumerate()
+        .map(|(i, (&s, &f))| if masks.visible(i) { s | !f } else { 0 })
+        .collect();
+    let normals = (0..masks.height)
+        .flat_map(|y| (0..masks.width).map(move |x| (x, y)))
+        .map(|(x, y)| readback.normal(x, y).to_array())
+        .collect();
+    (bits, normals)
+}
+
+/// The smallest view depth of any visible pixel of `masks`.
+fn nearest_view_depth(camera: &Camera, masks: &ShadowMasks) -> Option<f64> {
+    // NDC depth d of a perspective [0, 1] projection: view depth = n f / (f - d (f - n)).
+    let (n, f) = (camera.z_near(), camera.z_far());
+    masks
+        .depth
+        .iter()
+        .filter(|&&d| d < 1.0)
+        .map(|&d| n * f / (f - f64::from(d) * (f - n)))
+        .min_by(f64::total_cmp)
+}
+
+/// Runs (or resumes) the whole experiment and writes the report.
+///
+/// # Errors
+/// Scene, renderer and I/O failures.
+pub fn run(
+    config: &ExperimentConfig,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, ExperimentError> {
+    let started = Instant::now();
+    let mut runner = Runner::new(config, device, queue)?;
+    let mut writer = report::ConfigWriter::open(config)?;
+    progress(Progress { done: writer.done().len(), total: config.configs });
+    for index in 0..config.configs {
+        if writer.done().contains(&index) {
+            continue;
+        }
+        let outcome = runner.run_config(index)?;
+        writer.append(index, &outcome)?;
+        progress(Progress { done: writer.done().len(), total: config.configs });
+    }
+    let rows = writer.rows().to_vec();
+    let equivalence = report::equivalence(&mut runner, config)?;
+    let summary = report::summarize(config, &rows, equivalence, started.elapsed());
+    report::write_all(&mut runner, config, &rows, &summary)?;
+    Ok(summary)
+}
