@@ -41,7 +41,8 @@ fn run() -> Result<(), String> {
     eprintln!("adapter: {} ({:?}); {} triangles", info.name, info.backend, scene.triangle_count());
     let camera = support::walk_camera(0.1, UVec2::splat(size));
     let light = support::hemisphere_light(light_index, 500);
-    let problem = ShadowProblem::new(camera, light, scene.bounds(), ShadowMapSize::square(map)).map_err(|e| e.to_string())?;
+    let problem =
+        ShadowProblem::new(camera, light, scene.bounds(), ShadowMapSize::square(map)).map_err(|e| e.to_string())?;
 
     // The methods of Figure 4, in order. The scene-optimized matrix comes
     // from the optimizer (another module of lixel): plug it in here.
@@ -55,8 +56,7 @@ fn run() -> Result<(), String> {
     }
 
     let truth = RayCaster::new(&scene).trace_masks(&camera, &[light], size, size);
-    let mut renderer =
-        Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
     let (mut views, mut maps, mut masks) = (Vec::new(), Vec::new(), Vec::new());
     println!("{:<16} {:>14} {:>10}", "method", "misclassified", "fallback");
     for (name, matrix) in &methods {

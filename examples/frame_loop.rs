@@ -41,8 +41,7 @@ fn run() -> Result<(), String> {
     };
     let (device, queue, info) = support::gpu()?;
     eprintln!("adapter: {} ({:?}); {} triangles", info.name, info.backend, scene.triangle_count());
-    let mut renderer =
-        Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
     let records = support::run_loop(&mut renderer, &scene, &config)?;
 
     let csv_path = out.join("timings.csv");
@@ -57,15 +56,30 @@ fn run() -> Result<(), String> {
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.2}"));
-    println!("{} frames, {} ({} lights, {}² maps, {}² screen)", records.len(), config.policy.name(), config.lights, config.map, config.size);
+    println!(
+        "{} frames, {} ({} lights, {}² maps, {}² screen)",
+        records.len(),
+        config.policy.name(),
+        config.lights,
+        config.map,
+        config.size
+    );
     println!("mean frame time         {} ms", show(mean(&|r| Some(r.wall_ms))));
-    println!("mean GPU time           {} ms", show(mean(&|r| r.gpu.and_then(|g| g.total).map(|d| d.as_secs_f64() * 1e3))));
-    println!("readback latency        {} frames, {} ms (ready), {} ms (taken)",
+    println!(
+        "mean GPU time           {} ms",
+        show(mean(&|r| r.gpu.and_then(|g| g.total).map(|d| d.as_secs_f64() * 1e3)))
+    );
+    println!(
+        "readback latency        {} frames, {} ms (ready), {} ms (taken)",
         show(mean(&|r| r.readback.map(|x| x.1 as f64))),
         show(mean(&|r| r.readback.map(|x| x.2))),
-        show(mean(&|r| r.readback.map(|x| x.3))));
+        show(mean(&|r| r.readback.map(|x| x.3)))
+    );
     let stats = renderer.readback_ring().stats();
-    println!("readbacks               {} submitted, {} taken, {} refused (ring full), {} discarded", stats.submitted, stats.taken, stats.refused, stats.discarded);
+    println!(
+        "readbacks               {} submitted, {} taken, {} refused (ring full), {} discarded",
+        stats.submitted, stats.taken, stats.refused, stats.discarded
+    );
     println!("wrote {} and PNG frames to {}", csv_path.display(), out.display());
     Ok(())
 }

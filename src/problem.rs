@@ -151,10 +151,7 @@ impl ShadowProblem {
         let m = self.camera.clip_from_world();
         let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
         // Inside: h·[x; 1] >= 0 for each of these.
-        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
-            .into_iter()
-            .filter_map(plane_from_inside_halfspace)
-            .collect()
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].into_iter().filter_map(plane_from_inside_halfspace).collect()
     }
 
     /// The view frustum `V` as a polyhedron (may be huge for a far far plane).

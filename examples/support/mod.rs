@@ -17,10 +17,8 @@ pub fn gpu() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo), String> {
         .map_err(|e| format!("no GPU adapter ({e}); on Debian: apt-get install mesa-vulkan-drivers"))?;
     let required_features = adapter.features() & Renderer::optional_features();
     // Large maps need the adapter's own texture limit (lavapipe: 16384).
-    let required_limits = wgpu::Limits {
-        max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
-        ..wgpu::Limits::default()
-    };
+    let required_limits =
+        wgpu::Limits { max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d, ..wgpu::Limits::default() };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("lixel example device"),
         required_features,
@@ -106,10 +104,7 @@ impl Args {
         }
     }
 
-    pub fn list<T: std::str::FromStr>(&self, name: &str, default: &[T]) -> Result<Vec<T>, String>
-    where
-        T: Clone,
-    {
+    pub fn list<T: std::str::FromStr + Clone>(&self, name: &str, default: &[T]) -> Result<Vec<T>, String> {
         match self.value(name) {
             Some(v) => v.split(',').map(|s| s.parse().map_err(|_| format!("{name}: cannot parse {s:?}"))).collect(),
             None => Ok(default.to_vec()),
@@ -131,7 +126,12 @@ pub fn montage(images: &[image::RgbaImage], columns: usize) -> image::RgbaImage 
     );
     for (k, img) in images.iter().enumerate() {
         let (c, r) = (k as u32 % columns, k as u32 / columns);
-        image::imageops::overlay(&mut out, img, i64::from(gutter + c * (w + gutter)), i64::from(gutter + r * (h + gutter)));
+        image::imageops::overlay(
+            &mut out,
+            img,
+            i64::from(gutter + c * (w + gutter)),
+            i64::from(gutter + r * (h + gutter)),
+        );
     }
     out
 }
@@ -206,9 +206,10 @@ impl FrameRecord {
     pub fn csv_row(&self) -> String {
         let ms = |d: Option<std::time::Duration>| d.map_or(String::new(), |d| format!("{:.3}", d.as_secs_f64() * 1e3));
         let g = self.gpu.unwrap_or_default();
-        let (rb_frame, lat_frames, ready, taken) = self.readback.map_or((String::new(), String::new(), String::new(), String::new()), |r| {
-            (r.0.to_string(), r.1.to_string(), format!("{:.3}", r.2), format!("{:.3}", r.3))
-        });
+        let (rb_frame, lat_frames, ready, taken) =
+            self.readback.map_or((String::new(), String::new(), String::new(), String::new()), |r| {
+                (r.0.to_string(), r.1.to_string(), format!("{:.3}", r.2), format!("{:.3}", r.3))
+            });
         format!(
             "{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,

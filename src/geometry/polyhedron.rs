@@ -431,7 +431,8 @@ impl ConvexPolyhedron {
         }
         let dist: Vec<f64> = self.planes().map(|plane| plane.signed_distance(p)).collect();
         let sees_p: Vec<bool> = dist.iter().map(|&d| d > eps).collect();
-        let mut planes: Vec<Plane> = self.planes().zip(&sees_p).filter(|&(_, &sees)| !sees).map(|(plane, _)| plane).collect();
+        let mut planes: Vec<Plane> =
+            self.planes().zip(&sees_p).filter(|&(_, &sees)| !sees).map(|(plane, _)| plane).collect();
         for (a, b, neighbour) in self.silhouette(&sees_p) {
             if dist[neighbour] <= 0.0 {
                 planes.extend(self.cone_plane(a, b, p, eps));
@@ -859,10 +860,8 @@ mod tests {
 
     #[test]
     fn clip_all_and_intersect_aabb() {
-        let planes: Vec<Plane> = [DVec3::X, DVec3::Y, DVec3::Z]
-            .iter()
-            .map(|&n| Plane::from_point_normal(DVec3::splat(0.5), n))
-            .collect();
+        let planes: Vec<Plane> =
+            [DVec3::X, DVec3::Y, DVec3::Z].iter().map(|&n| Plane::from_point_normal(DVec3::splat(0.5), n)).collect();
         let small = unit_cube().clip_all(&planes, EPS);
         assert!((small.volume() - 0.125).abs() < 1e-15);
         let boxed = unit_cube().intersect_aabb(DVec3::splat(0.25), DVec3::splat(2.0), EPS);
@@ -930,7 +929,8 @@ mod tests {
         let planes = cube.hull_with_point_planes(p, EPS);
         assert_eq!(planes.len(), 9);
         let mut from_planes: Vec<Plane> = hull.planes().collect();
-        let key = |a: &Plane, b: &Plane| a.to_homogeneous().to_array().partial_cmp(&b.to_homogeneous().to_array()).unwrap();
+        let key =
+            |a: &Plane, b: &Plane| a.to_homogeneous().to_array().partial_cmp(&b.to_homogeneous().to_array()).unwrap();
         from_planes.sort_by(key);
         let mut sorted = planes.clone();
         sorted.sort_by(key);
