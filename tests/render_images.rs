@@ -1,6 +1,8 @@
 //! Reference images: the camera view, the masks and a shadow map of the
 //! tiny scene (128x128, widths multiples of 64).
 
+#![cfg(feature = "render")]
+
 mod render_common;
 
 use lixel::render::{masks_image, shadow_map_image, Frame, Renderer, RendererOptions};
@@ -24,5 +26,10 @@ fn renders_match_reference_images() {
     assert_matches_reference("masks-focused", &masks_image(&renderer.read_masks().unwrap()), 0, MAX_DIFFERING);
     let map = renderer.read_shadow_map(0).unwrap();
     assert_eq!((map.width, map.height), (256, 256));
-    assert_matches_reference("shadow-map-focused-sun", &shadow_map_image(&map, false), CHANNEL_TOLERANCE, MAX_DIFFERING);
+    assert_matches_reference(
+        "shadow-map-focused-sun",
+        &shadow_map_image(&map, false),
+        CHANNEL_TOLERANCE,
+        MAX_DIFFERING,
+    );
 }

@@ -1,5 +1,7 @@
 //! The renderer's shadow bits agree with an exact CPU ray cast.
 
+#![cfg(feature = "render")]
+
 mod render_common;
 
 use lixel::mesh::RayCaster;

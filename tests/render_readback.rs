@@ -1,5 +1,7 @@
 //! The analysis readback never holds up a frame.
 
+#![cfg(feature = "render")]
+
 mod render_common;
 
 use lixel::mesh::RayCaster;
@@ -27,7 +29,8 @@ fn frames_keep_submitting_while_a_readback_is_pending() {
     assert!(first.analysis_queued);
     for expected in 1..6 {
         assert_eq!(renderer.readback_ring().in_flight(), 1, "the readback is still pending (not taken)");
-        let report = renderer.render(&Frame { camera: &camera, lights: &lights, masks: false, analysis: None }).unwrap();
+        let report =
+            renderer.render(&Frame { camera: &camera, lights: &lights, masks: false, analysis: None }).unwrap();
         assert_eq!(report.frame, expected);
     }
     renderer.wait_idle().unwrap();

@@ -111,7 +111,8 @@ impl Mesh {
         if let Some(&index) = self.indices.iter().find(|&&i| i as usize >= self.positions.len()) {
             return Err(MeshError::IndexOutOfRange { index, vertices: self.positions.len() });
         }
-        if let Some(vertex) = self.positions.iter().zip(&self.normals).position(|(p, n)| !(p.is_finite() && n.is_finite()))
+        if let Some(vertex) =
+            self.positions.iter().zip(&self.normals).position(|(p, n)| !(p.is_finite() && n.is_finite()))
         {
             return Err(MeshError::NonFinite { vertex });
         }
@@ -239,8 +240,8 @@ impl Scene {
                 .filter_map(|o| o.mesh.bounds())
                 .reduce(|a, b| a.union(&b))
         };
-        let receivers = union(None)
-            .unwrap_or_else(|| Aabb::from_corners(glam::DVec3::splat(-0.5), glam::DVec3::splat(0.5)));
+        let receivers =
+            union(None).unwrap_or_else(|| Aabb::from_corners(glam::DVec3::splat(-0.5), glam::DVec3::splat(0.5)));
         let casters = union(Some(Role::CasterAndReceiver)).unwrap_or(receivers);
         SceneBounds { casters, receivers }
     }

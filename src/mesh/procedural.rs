@@ -65,8 +65,9 @@ impl ProceduralScene {
         for k in 0..count {
             let (i, j) = (k as u32 % n, k as u32 / n);
             let jitter = Vec3::new(rng.range(-0.25, 0.25), 0.0, rng.range(-0.25, 0.25)) * cell;
-            let centre = Vec3::new(-0.5 * extent + (i as f32 + 0.5) * cell, 0.0, -0.5 * extent + (j as f32 + 0.5) * cell)
-                + jitter;
+            let centre =
+                Vec3::new(-0.5 * extent + (i as f32 + 0.5) * cell, 0.0, -0.5 * extent + (j as f32 + 0.5) * cell)
+                    + jitter;
             let size = cell * rng.range(0.18, 0.32);
             let spin = Quat::from_rotation_y(rng.range(0.0, std::f32::consts::TAU));
             // Every fifth object floats: its shadow is detached from it.
@@ -80,8 +81,7 @@ impl ProceduralScene {
                 2 => {
                     let tilt = Quat::from_rotation_x(rng.range(0.0, 1.2));
                     let minor = 0.3 * size;
-                    let mesh = primitives::torus(size, minor, per_object)
-                        .transformed(&Affine3A::from_quat(tilt));
+                    let mesh = primitives::torus(size, minor, per_object).transformed(&Affine3A::from_quat(tilt));
                     // Rest on the lowest point of the tilted torus.
                     let low = mesh.positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
                     ("torus", mesh, -low)

@@ -137,13 +137,17 @@ impl Bvh {
         let mut best: Option<Hit> = None;
         // Shared by the traversal (which prunes with it) and the triangle test.
         let t_best = std::cell::Cell::new(t_max);
-        self.traverse(ray, |t_lim| t_lim.min(t_best.get()), |k, tri| {
-            if let Some((t, uv)) = intersect(ray, tri, t_best.get()) {
-                t_best.set(t);
-                best = Some(Hit { t, triangle: self.order[k], barycentric: uv });
-            }
-            false
-        });
+        self.traverse(
+            ray,
+            |t_lim| t_lim.min(t_best.get()),
+            |k, tri| {
+                if let Some((t, uv)) = intersect(ray, tri, t_best.get()) {
+                    t_best.set(t);
+                    best = Some(Hit { t, triangle: self.order[k], barycentric: uv });
+                }
+                false
+            },
+        );
         best
     }
 
@@ -151,21 +155,20 @@ impl Bvh {
     #[must_use]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let mut hit = false;
-        self.traverse(ray, |t| t.min(t_max), |_, tri| {
-            hit = intersect(ray, tri, t_max).is_some();
-            hit
-        });
+        self.traverse(
+            ray,
+            |t| t.min(t_max),
+            |_, tri| {
+                hit = intersect(ray, tri, t_max).is_some();
+                hit
+            },
+        );
         hit
     }
 
     /// Depth-first traversal, nearer child first. `limit` gives the current
     /// search distance; `visit` tests one triangle and returns `true` to stop.
-    fn traverse(
-        &self,
-        ray: &Ray,
-        mut limit: impl FnMut(f32) -> f32,
-        mut visit: impl FnMut(usize, &Triangle) -> bool,
-    ) {
+    fn traverse(&self, ray: &Ray, mut limit: impl FnMut(f32) -> f32, mut visit: impl FnMut(usize, &Triangle) -> bool) {
         if self.triangles.is_empty() {
             return;
         }

@@ -88,12 +88,9 @@ impl AnalysisReadback {
     #[must_use]
     pub fn screen_point(&self, x: u32, y: u32) -> DVec3 {
         let i = (y * self.masks.width + x) as usize;
-        let scale = self.camera.viewport().as_dvec2() / glam::DVec2::new(self.masks.width.into(), self.masks.height.into());
-        DVec3::new(
-            (f64::from(x) + 0.5) * scale.x,
-            (f64::from(y) + 0.5) * scale.y,
-            f64::from(self.masks.depth[i]),
-        )
+        let scale =
+            self.camera.viewport().as_dvec2() / glam::DVec2::new(self.masks.width.into(), self.masks.height.into());
+        DVec3::new((f64::from(x) + 0.5) * scale.x, (f64::from(y) + 0.5) * scale.y, f64::from(self.masks.depth[i]))
     }
 
     /// World position of the surface at analysis pixel `(x, y)`; `None` for
@@ -127,7 +124,8 @@ mod tests {
     fn pack_normal(n: Vec3) -> u32 {
         let mut p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
         if n.z < 0.0 {
-            p = (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs())) * Vec2::select(p.cmpge(Vec2::ZERO), Vec2::ONE, -Vec2::ONE);
+            p = (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs()))
+                * Vec2::select(p.cmpge(Vec2::ZERO), Vec2::ONE, -Vec2::ONE);
         }
         let q = |v: f32| ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
         q(p.x) | q(p.y) << 16
@@ -137,7 +135,12 @@ mod tests {
     fn normals_round_trip() {
         for i in 0..200 {
             let a = i as f32 * 0.731;
-            let n = Vec3::new(a.cos() * (a * 0.3).sin(), (a * 1.7).sin(), (a * 0.3).cos() * a.sin()).normalize();
+            // Points spread over the sphere, both hemispheres (z < 0 folds).
+            let n =
+                Vec3::new(a.cos() * (a * 0.3).sin(), (a * 1.7).sin(), (a * 0.3).cos() * a.sin()).normalize_or_zero();
+            if n == Vec3::ZERO {
+                continue;
+            }
             let back = unpack_normal(pack_normal(n));
             assert!((back - n).length() < 1e-3, "{n} -> {back}");
         }

@@ -624,9 +624,11 @@ impl Renderer {
             if m.needs_unclipped_depth && !unclipped {
                 unavailable += 1;
             }
-            let timestamp_writes = self.timer.as_ref().zip(timer).and_then(|(t, q)| {
-                t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last)
-            });
+            let timestamp_writes = self
+                .timer
+                .as_ref()
+                .zip(timer)
+                .and_then(|(t, q)| t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last));
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(&format!("lixel shadow pass {i}")),
                 color_attachments: &[],

@@ -49,7 +49,8 @@ impl Renderer {
     /// polling failures.
     pub fn read_color(&self) -> Result<image::RgbaImage, RenderError> {
         let targets = self.camera_targets.as_ref().ok_or(RenderError::NothingRendered)?;
-        let bytes = self.read_texture(&targets.color.texture, wgpu::TextureAspect::All, 0, targets.width, targets.height, 4)?;
+        let bytes =
+            self.read_texture(&targets.color.texture, wgpu::TextureAspect::All, 0, targets.width, targets.height, 4)?;
         image::RgbaImage::from_raw(targets.width, targets.height, bytes).ok_or(RenderError::NothingRendered)
     }
 
@@ -113,8 +114,9 @@ impl Renderer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let mut encoder =
-            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel blocking readback") });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel blocking readback") });
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
                 texture,

@@ -141,7 +141,8 @@ pub(crate) struct ScenePasses {
 impl ScenePasses {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         // WGSL has no includes: the shared declarations are prepended.
-        let camera_source = concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/camera.wgsl"));
+        let camera_source =
+            concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/camera.wgsl"));
         let analysis_source =
             concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/analysis.wgsl"));
         let camera_module = scene_shader(device, "lixel camera shader", camera_source);
@@ -178,40 +179,41 @@ impl ScenePasses {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = |label: &str, module: &wgpu::ShaderModule, entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(VertexRaw::layout())],
-                },
-                // No culling, as in the shadow pass and the ray caster.
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
+        let pipeline =
+            |label: &str, module: &wgpu::ShaderModule, entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(VertexRaw::layout())],
+                    },
+                    // No culling, as in the shadow pass and the ray caster.
+                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: wgpu::StencilState::default(),
+                        bias: wgpu::DepthBiasState::default(),
+                    }),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
         let color_target = Some(wgpu::ColorTargetState::from(COLOR_FORMAT));
         let masks_target = Some(wgpu::ColorTargetState::from(MASKS_FORMAT));
         Self {
-            color: pipeline("lixel camera pipeline", &camera_module, "fs_color", &[color_target.clone()]),
+            color: pipeline("lixel camera pipeline", &camera_module, "fs_color", std::slice::from_ref(&color_target)),
             color_masks: pipeline(
                 "lixel camera pipeline with masks",
                 &camera_module,
@@ -231,7 +233,13 @@ pub(crate) struct Target {
 }
 
 impl Target {
-    pub(crate) fn new(device: &wgpu::Device, label: &str, format: wgpu::TextureFormat, width: u32, height: u32) -> Self {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        label: &str,
+        format: wgpu::TextureFormat,
+        width: u32,
+        height: u32,
+    ) -> Self {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
@@ -242,10 +250,8 @@ impl Target {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
-        let view = texture.create_view(&wgpu::TextureViewDescriptor {
-            label: Some(&format!("{label} view")),
-            ..Default::default()
-        });
+        let view = texture
+            .create_view(&wgpu::TextureViewDescriptor { label: Some(&format!("{label} view")), ..Default::default() });
         Self { texture, view }
     }
 }

@@ -46,7 +46,12 @@ enum SlotState<M> {
     /// Handed out by `acquire`, copy not yet submitted.
     Reserved,
     /// Mapping requested.
-    Pending { meta: M, frame: u64, submitted_at: Instant, signal: MapSignal },
+    Pending {
+        meta: M,
+        frame: u64,
+        submitted_at: Instant,
+        signal: MapSignal,
+    },
 }
 
 struct Slot<M> {
@@ -201,7 +206,8 @@ impl<M> ReadbackRing<M> {
             .max_by_key(|&(_, frame)| frame)?
             .0;
         let slot = &mut self.slots[newest];
-        let SlotState::Pending { meta, frame, submitted_at, signal } = std::mem::replace(&mut slot.state, SlotState::Free)
+        let SlotState::Pending { meta, frame, submitted_at, signal } =
+            std::mem::replace(&mut slot.state, SlotState::Free)
         else {
             unreachable!("selected slot is pending");
         };

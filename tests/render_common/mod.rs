@@ -104,7 +104,12 @@ pub fn assert_matches_reference(name: &str, actual: &image::RgbaImage, channel_t
     };
     if reference.dimensions() != actual.dimensions() {
         write_outputs(actual);
-        panic!("{name}: size {:?} != reference {:?}; see {}", actual.dimensions(), reference.dimensions(), out_dir.display());
+        panic!(
+            "{name}: size {:?} != reference {:?}; see {}",
+            actual.dimensions(),
+            reference.dimensions(),
+            out_dir.display()
+        );
     }
     let mut differing = 0usize;
     let difference = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {

@@ -1,0 +1,344 @@
+//! Shared by the examples: a device, the walkthrough scenario, argument
+//! parsing helpers. (Adapter selection lives here, not in the library.)
+#![allow(dead_code)]
+
+use std::f64::consts::TAU;
+
+use glam::{DVec3, UVec2};
+use lixel::mesh::{load_obj, ProceduralScene, Scene};
+use lixel::render::Renderer;
+use lixel::{Camera, Light};
+
+/// A device with the renderer's optional features where available; the
+/// instance honours `WGPU_BACKEND`.
+pub fn gpu() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo), String> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+        .map_err(|e| format!("no GPU adapter ({e}); on Debian: apt-get install mesa-vulkan-drivers"))?;
+    let required_features = adapter.features() & Renderer::optional_features();
+    // Large maps need the adapter's own texture limit (lavapipe: 16384).
+    let required_limits =
+        wgpu::Limits { max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d, ..wgpu::Limits::default() };
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("lixel example device"),
+        required_features,
+        required_limits,
+        ..Default::default()
+    }))
+    .map_err(|e| format!("cannot open the device: {e}"))?;
+    Ok((device, queue, adapter.get_info()))
+}
+
+/// `--preset tiny|small|default` or `--obj path`.
+pub fn scene(preset: &str, obj: Option<&str>) -> Result<Scene, String> {
+    if let Some(path) = obj {
+        return load_obj(path).map_err(|e| e.to_string());
+    }
+    Ok(match preset {
+        "tiny" => ProceduralScene::tiny(),
+        "small" => ProceduralScene::small(),
+        "default" => ProceduralScene::default(),
+        other => return Err(format!("unknown preset {other:?} (tiny, small, default)")),
+    }
+    .build())
+}
+
+/// The walkthrough at time `t` in `[0, 1)`: a viewer slightly above the
+/// floor walking a loop around the objects (just outside them, on the
+/// floor), looking across the scene.
+pub fn walk_camera(t: f64, size: UVec2) -> Camera {
+    let a = TAU * t;
+    let eye = DVec3::new(36.0 * a.cos(), 2.0, 36.0 * a.sin());
+    // Look across the middle, a little ahead along the walk.
+    let ahead = DVec3::new(-a.sin(), 0.0, a.cos());
+    let target = DVec3::new(0.0, 0.5, 0.0) + 8.0 * ahead;
+    Camera::look_at(eye, target, DVec3::Y, 60f64.to_radians(), size, 0.1, 200.0).expect("valid camera")
+}
+
+/// `count` lights at time `t`: a sun circling high in the sky, then point
+/// lights circling above the scene at different heights.
+pub fn moving_lights(t: f64, count: usize) -> Vec<Light> {
+    (0..count)
+        .map(|i| {
+            let a = TAU * (t + i as f64 / count.max(1) as f64);
+            if i == 0 {
+                Light::directional(DVec3::new(0.5 * a.cos(), -1.0, 0.5 * a.sin()))
+            } else {
+                let r = 18.0 + 6.0 * i as f64;
+                Light::point(DVec3::new(r * (-a).cos(), 35.0 + 5.0 * i as f64, r * (-a).sin()))
+            }
+        })
+        .collect()
+}
+
+/// Light `k` of 500 on a distant hemisphere, as in the paper's experiment
+/// (a deterministic Fibonacci spiral over the upper hemisphere).
+pub fn hemisphere_light(k: usize, total: usize) -> Light {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let z = (k as f64 + 0.5) / total as f64; // height, uniform in (0, 1]
+    let r = (1.0 - z * z).sqrt();
+    let phi = golden * k as f64;
+    Light::directional(-DVec3::new(r * phi.cos(), z, r * phi.sin()))
+}
+
+/// A tiny flag parser: `--name value` pairs and bare `--flag`s.
+pub struct Args(Vec<String>);
+
+impl Args {
+    pub fn from_env() -> Self {
+        Self(std::env::args().skip(1).collect())
+    }
+
+    pub fn flag(&self, name: &str) -> bool {
+        self.0.iter().any(|a| a == name)
+    }
+
+    pub fn value(&self, name: &str) -> Option<&str> {
+        self.0.iter().position(|a| a == name).and_then(|i| self.0.get(i + 1)).map(String::as_str)
+    }
+
+    pub fn parse<T: std::str::FromStr>(&self, name: &str, default: T) -> Result<T, String> {
+        match self.value(name) {
+            Some(v) => v.parse().map_err(|_| format!("{name}: cannot parse {v:?}")),
+            None => Ok(default),
+        }
+    }
+
+    pub fn list<T: std::str::FromStr + Clone>(&self, name: &str, default: &[T]) -> Result<Vec<T>, String> {
+        match self.value(name) {
+            Some(v) => v.split(',').map(|s| s.parse().map_err(|_| format!("{name}: cannot parse {s:?}"))).collect(),
+            None => Ok(default.to_vec()),
+        }
+    }
+}
+
+/// Side-by-side montage of equally sized images, `columns` per row, with a
+/// 4-pixel white gutter.
+pub fn montage(images: &[image::RgbaImage], columns: usize) -> image::RgbaImage {
+    let (w, h) = images.first().map_or((1, 1), |i| i.dimensions());
+    let gutter = 4;
+    let columns = columns.max(1) as u32;
+    let rows = (images.len() as u32).div_ceil(columns);
+    let mut out = image::RgbaImage::from_pixel(
+        columns * (w + gutter) + gutter,
+        rows * (h + gutter) + gutter,
+        image::Rgba([255, 255, 255, 255]),
+    );
+    for (k, img) in images.iter().enumerate() {
+        let (c, r) = (k as u32 % columns, k as u32 / columns);
+        image::imageops::overlay(
+            &mut out,
+            img,
+            i64::from(gutter + c * (w + gutter)),
+            i64::from(gutter + r * (h + gutter)),
+        );
+    }
+    out
+}
+
+/// How the frame loop picks each light's matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Policy {
+    /// Focused maps, solved every frame.
+    Focused,
+    /// LiSPSM maps, solved every frame.
+    LiSpsm,
+    /// The scene-optimized pipeline: analysis pass every 3 frames (every
+    /// 4th with standard maps), asynchronous readback, optimizer.
+    SceneOptimized,
+}
+
+impl Policy {
+    pub fn parse(name: &str) -> Result<Self, String> {
+        match name {
+            "focused" => Ok(Self::Focused),
+            "lispsm" => Ok(Self::LiSpsm),
+            "scene-optimized" | "optimized" => Ok(Self::SceneOptimized),
+            other => Err(format!("unknown method {other:?} (focused, lispsm, scene-optimized)")),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Focused => "focused",
+            Self::LiSpsm => "lispsm",
+            Self::SceneOptimized => "scene-optimized",
+        }
+    }
+}
+
+/// Settings of one run of the frame loop.
+pub struct LoopConfig {
+    pub policy: Policy,
+    pub lights: usize,
+    pub map: u32,
+    pub size: u32,
+    pub frames: u64,
+    /// Frames of the walk per full loop (animation speed).
+    pub frames_per_loop: u64,
+    /// Frames in flight: after submitting frame `n`, wait for `n + 1 - in_flight`.
+    pub in_flight: u64,
+    /// Write `frame-NNNN.png` every this many frames into the directory.
+    pub png: Option<(u64, std::path::PathBuf)>,
+}
+
+/// What one frame did and cost.
+#[derive(Clone, Debug, Default)]
+pub struct FrameRecord {
+    pub frame: u64,
+    /// From this frame's start to the next frame's start.
+    pub wall_ms: f64,
+    /// Solving (or optimizing) the light matrices on the CPU.
+    pub solve_ms: f64,
+    /// Encoding and submitting.
+    pub encode_ms: f64,
+    pub gpu: Option<lixel::render::GpuFrameTimes>,
+    pub analysis_queued: bool,
+    pub analysis_skipped: bool,
+    /// The analysis readback consumed this frame: (its frame, latency frames, ready ms, taken ms).
+    pub readback: Option<(u64, u64, f64, f64)>,
+    pub matrices_updated: usize,
+}
+
+impl FrameRecord {
+    pub const CSV_HEADER: &'static str = "frame,wall_ms,solve_ms,encode_ms,gpu_shadow_ms,gpu_camera_ms,gpu_analysis_ms,gpu_total_ms,analysis_queued,analysis_skipped,readback_frame,latency_frames,latency_ready_ms,latency_taken_ms,matrices_updated";
+
+    pub fn csv_row(&self) -> String {
+        let ms = |d: Option<std::time::Duration>| d.map_or(String::new(), |d| format!("{:.3}", d.as_secs_f64() * 1e3));
+        let g = self.gpu.unwrap_or_default();
+        let (rb_frame, lat_frames, ready, taken) =
+            self.readback.map_or((String::new(), String::new(), String::new(), String::new()), |r| {
+                (r.0.to_string(), r.1.to_string(), format!("{:.3}", r.2), format!("{:.3}", r.3))
+            });
+        format!(
+            "{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
+            self.frame,
+            self.wall_ms,
+            self.solve_ms,
+            self.encode_ms,
+            ms(self.gpu.and(g.shadow)),
+            ms(self.gpu.and(g.camera)),
+            ms(self.gpu.and(g.analysis)),
+            ms(self.gpu.and(g.total)),
+            u8::from(self.analysis_queued),
+            u8::from(self.analysis_skipped),
+            rb_frame,
+            lat_frames,
+            ready,
+            taken,
+            self.matrices_updated
+        )
+    }
+}
+
+/// Runs the animated frame loop and returns one record per frame.
+pub fn run_loop(
+    renderer: &mut lixel::render::Renderer,
+    scene: &Scene,
+    config: &LoopConfig,
+) -> Result<Vec<FrameRecord>, String> {
+    use lixel::render::{AdaptiveLights, AnalysisKind, AnalysisRequest, Cadence, Frame};
+    use lixel::{Parameterization, ShadowMapSize, ShadowProblem};
+    use std::time::Instant;
+
+    let bounds = scene.bounds();
+    let cadence = Cadence::default();
+    let mut adaptive: Option<AdaptiveLights> = None;
+    let mut records: Vec<FrameRecord> = Vec::with_capacity(config.frames as usize);
+    let mut submissions = std::collections::VecDeque::new();
+    let mut previous_start: Option<Instant> = None;
+    for n in 0..config.frames {
+        let start = Instant::now();
+        if let (Some(prev), Some(last)) = (previous_start, records.last_mut()) {
+            last.wall_ms = start.duration_since(prev).as_secs_f64() * 1e3;
+        }
+        previous_start = Some(start);
+        let mut record = FrameRecord { frame: n, ..Default::default() };
+
+        let t = n as f64 / config.frames_per_loop as f64;
+        let camera = walk_camera(t, UVec2::splat(config.size));
+        let lights = moving_lights(0.37 * t, config.lights);
+        let problems: Vec<ShadowProblem> = lights
+            .iter()
+            .map(|l| ShadowProblem::new(camera, *l, bounds, ShadowMapSize::square(config.map)))
+            .collect::<Result<_, _>>()
+            .map_err(|e| e.to_string())?;
+        let solve = |p: &Parameterization| -> Result<Vec<lixel::LightMatrix>, String> {
+            problems.iter().map(|problem| problem.solve(p).map_err(|e| e.to_string())).collect()
+        };
+
+        let solve_start = Instant::now();
+        let (matrices, standard, analysis_kind) = match config.policy {
+            Policy::Focused => (solve(&Parameterization::Focused)?, None, None),
+            Policy::LiSpsm => (solve(&Parameterization::LiSpsm(Default::default()))?, None, None),
+            Policy::SceneOptimized => {
+                // The focused matrices are the starting point and the
+                // standard maps of the periodic standard analysis pass.
+                let focused = solve(&Parameterization::Focused)?;
+                let adaptive = adaptive.get_or_insert_with(|| AdaptiveLights::new(focused.clone()));
+                let readback = renderer.try_take_analysis();
+                if let Some(r) = &readback {
+                    record.readback = Some((
+                        r.frame,
+                        r.latency.frames,
+                        r.latency.ready.as_secs_f64() * 1e3,
+                        r.latency.taken.as_secs_f64() * 1e3,
+                    ));
+                }
+                // TODO(merge): the optimizer plugs in here:
+                //   |light, readback, previous| lixel::optimize_light_matrix(&problems[light], readback, previous).ok()
+                // Until then the stand-in keeps the previous matrix, and the
+                // refit below (focused for the current camera and light)
+                // stands in for the optimizer's per-frame rescale and shift.
+                record.matrices_updated = adaptive.update(readback.as_ref(), |_, _, _| None);
+                for (light, matrix) in focused.iter().enumerate() {
+                    adaptive.set(light, *matrix);
+                }
+                (adaptive.matrices().to_vec(), Some(focused), cadence.analysis_for(n))
+            }
+        };
+        record.solve_ms = solve_start.elapsed().as_secs_f64() * 1e3;
+
+        let analysis = analysis_kind.map(|kind| AnalysisRequest {
+            lights: if kind == AnalysisKind::Standard { standard.as_deref() } else { None },
+            tag: kind.tag(),
+        });
+        let report = renderer
+            .render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })
+            .map_err(|e| e.to_string())?;
+        record.encode_ms = report.cpu_time.as_secs_f64() * 1e3;
+        record.analysis_queued = report.analysis_queued;
+        record.analysis_skipped = report.analysis_skipped;
+        submissions.push_back(report.submission);
+
+        if let Some((every, dir)) = &config.png {
+            if n % every == 0 {
+                let image = renderer.read_color().map_err(|e| e.to_string())?;
+                image.save(dir.join(format!("frame-{n:04}.png"))).map_err(|e| e.to_string())?;
+            }
+        }
+        // Frame pacing, like a swapchain: at most `in_flight` frames queued.
+        while submissions.len() as u64 >= config.in_flight.max(1) {
+            let oldest = submissions.pop_front().expect("non-empty");
+            renderer.wait_for(&oldest).map_err(|e| e.to_string())?;
+        }
+        while let Some(times) = renderer.try_take_gpu_times() {
+            if let Some(r) = records.get_mut(times.frame as usize) {
+                r.gpu = Some(times);
+            } else if times.frame == n {
+                record.gpu = Some(times);
+            }
+        }
+        records.push(record);
+    }
+    renderer.wait_idle().map_err(|e| e.to_string())?;
+    if let (Some(prev), Some(last)) = (previous_start, records.last_mut()) {
+        last.wall_ms = prev.elapsed().as_secs_f64() * 1e3;
+    }
+    while let Some(times) = renderer.try_take_gpu_times() {
+        if let Some(r) = records.get_mut(times.frame as usize) {
+            r.gpu = Some(times);
+        }
+    }
+    Ok(records)
+}
