@@ -5,10 +5,6 @@
 // framebuffer and texture row 0 at the top.
 
 const MAX_LIGHTS: u32 = 32u;
-// `Light::flags` bit: the map was rendered with a reversed depth test
-// (greater is closer, cleared to 0).
-const LIGHT_REVERSED_DEPTH: u32 = 1u;
-
 struct Camera {
     clip_from_world: mat4x4<f32>,
     // xyz: eye position in world space.
@@ -29,7 +25,10 @@ struct Light {
     // layer of the shadow-map array (layers are as large as the largest map).
     map_size: vec2<f32>,
     layer: u32,
+    // Reserved (0).
     flags: u32,
+    // Linear light depth: (min distance, 1 / (max - min), 0, 0); see shadow.wgsl.
+    depth: vec4<f32>,
 }
 
 struct Lights {
@@ -91,12 +90,15 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let size = vec2<i32>(light.map_size);
     let coords = clamp(vec2<i32>(floor(texel)), vec2<i32>(0), size - vec2<i32>(1));
     let stored = textureLoad(shadow_maps, coords, light.layer, 0);
-    // Depth range [0, 1]; receivers beyond the far plane compare as at it.
-    let depth = clamp(ndc.z, 0.0, 1.0);
-    if (light.flags & LIGHT_REVERSED_DEPTH) != 0u {
-        // Reversed test: larger stored values are closer to the light.
-        return stored > depth;
+    // Linear light depth, as the shadow pass stored it (see shadow.wgsl);
+    // receivers beyond the far end compare as at it.
+    var distance: f32;
+    if light.position.w > 0.0 {
+        distance = length(world - light.position.xyz);
+    } else {
+        distance = dot(world, -light.position.xyz);
     }
+    let depth = clamp((distance - light.depth.x) * light.depth.y, 0.0, 1.0);
     return stored < depth;
 }
 

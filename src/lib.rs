@@ -59,7 +59,7 @@ mod tolerance;
 pub use camera::Camera;
 pub use error::{LixelError, Result};
 pub use light::{Light, LightFrame};
-pub use matrix::{DepthRange, Fallback, LightMatrix, Method};
+pub use matrix::{light_distance, DepthRange, Fallback, LightDistance, LightMatrix, Method};
 pub use methods::{
     psm_light_case, LiSpsmOptions, NOpt, Parameterization, PlaneOptimalOptions, PsmLightCase, PsmOptions,
 };

@@ -15,7 +15,11 @@ use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
 #[derive(Parser)]
-#[command(name = "lixel", version, about = "Light matrices that give every screen pixel as much shadow-map resolution as possible")]
+#[command(
+    name = "lixel",
+    version,
+    about = "Light matrices that give every screen pixel as much shadow-map resolution as possible"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -25,7 +29,7 @@ struct Cli {
 enum Command {
     /// Count misclassified shadow pixels of every method against exact ground
     /// truth (Chong & Gortler 2006, Table 1) and write a report directory.
-    Experiment(ExperimentArgs),
+    Experiment(Box<ExperimentArgs>),
     /// Compute every classical matrix for one walkthrough configuration and
     /// print how well each samples the visible floor (badness: screen pixels
     /// per texel, squared; lower is better).
@@ -138,7 +142,8 @@ struct MethodsArgs {
 }
 
 fn parse_vec3(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| e.to_string())).collect::<Result<_, _>>()?;
+    let v: Vec<f64> =
+        s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| e.to_string())).collect::<Result<_, _>>()?;
     match v[..] {
         [x, y, z] => Ok(DVec3::new(x, y, z)),
         _ => Err("expected x,y,z".into()),
@@ -210,7 +215,12 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let (device, queue) = gpu()?;
     if args.timing {
         let options = TimingOptions { frames: args.timing_frames, ..Default::default() };
-        eprintln!("timing {} cells of {} frames on {:?}...", options.lights.len() * options.maps.len(), options.frames, config.scene);
+        eprintln!(
+            "timing {} cells of {} frames on {:?}...",
+            options.lights.len() * options.maps.len(),
+            options.frames,
+            config.scene
+        );
         let rows = experiment::run_timing(&config, &options, &device, &queue).map_err(|e| e.to_string())?;
         let table = experiment::timing_markdown(&rows);
         std::fs::create_dir_all(&config.out).map_err(|e| e.to_string())?;
@@ -222,8 +232,10 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let bar = (!args.quiet).then(|| {
         let bar = indicatif::ProgressBar::new(config.configs as u64);
         bar.set_style(
-            indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} configurations, ETA {eta}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            indicatif::ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:40}] {pos}/{len} configurations, ETA {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         bar
     });
@@ -258,13 +270,19 @@ fn run_methods(args: &MethodsArgs) -> Result<(), String> {
     let objects = Aabb::from_corners(DVec3::new(-30.0, 0.0, -30.0), DVec3::new(30.0, 6.0, 30.0));
     let bounds = SceneBounds { casters: objects, receivers: objects.union(&floor) };
     let light = if args.point { Light::point(args.light) } else { Light::directional(args.light) };
-    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(args.map)).map_err(|e| e.to_string())?;
+    let problem =
+        ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(args.map)).map_err(|e| e.to_string())?;
     let n = args.samples.max(2);
     let floor_plane = lixel::geometry::Plane::from_point_normal(DVec3::ZERO, DVec3::Y);
     let floor_samples = plane_samples(&camera, &floor_plane, &floor, UVec2::new(n, n));
     // What a depth readback would supply to PSM: the nearest visible receiver.
     let nearest = floor_samples.iter().map(|(p, _)| camera.view_depth(*p)).fold(f64::INFINITY, f64::min);
-    println!("{} floor samples (one per pixel of a {n}x{n} grid), {}x{} map, {light:?}", floor_samples.len(), args.map, args.map);
+    println!(
+        "{} floor samples (one per pixel of a {n}x{n} grid), {}x{} map, {light:?}",
+        floor_samples.len(),
+        args.map,
+        args.map
+    );
     println!("{:<15} {:>12} {:>12} {:>12}  fallback", "method", "median b", "mean b", "max b");
     let psm_near = Parameterization::Psm(PsmOptions { min_view_depth: nearest.is_finite().then_some(nearest) });
     let methods = Parameterization::ALL_DEFAULT.iter().map(|p| (p.method().name(), *p));

@@ -104,6 +104,36 @@ pub enum DepthRange {
     },
 }
 
+/// Distance from the light along its rays, over every point whose depth the
+/// map must hold (receivers and their casters): radial `|x - l|` for point and
+/// spot lights, `d·x` for directional ones. A renderer that stores *linear*
+/// light depth (lixel's does: warped maps spend the projective depth range
+/// across the map instead of along the rays) normalizes with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightDistance {
+    /// Smallest distance (padded).
+    pub min: f64,
+    /// Largest distance (padded).
+    pub max: f64,
+}
+
+impl LightDistance {
+    /// `(distance - min) / (max - min)` of a world point, in `[0, 1]` over the range.
+    #[must_use]
+    pub fn normalized(&self, frame: &LightFrame, world: DVec3) -> f64 {
+        (light_distance(frame, world) - self.min) / (self.max - self.min)
+    }
+}
+
+/// Radial distance from a point light, or `d·x` for a directional one.
+#[must_use]
+pub fn light_distance(frame: &LightFrame, world: DVec3) -> f64 {
+    match *frame {
+        LightFrame::Perspective { position, .. } => (world - position).length(),
+        LightFrame::Orthographic { rotation } => rotation.row(2).dot(world),
+    }
+}
+
 /// A shadow map's light matrix and how it was made.
 ///
 /// `clip_from_world` is in wgpu conventions (depth `[0, 1]`, NDC y up). Its
@@ -120,6 +150,8 @@ pub struct LightMatrix {
     pub homography: DMat3,
     /// The depth row's parameters.
     pub depth: DepthRange,
+    /// The range of distances along the light's rays the map must hold.
+    pub light_distance: LightDistance,
     /// The shadow map's size in texels.
     pub map_size: ShadowMapSize,
     /// Render and compare with a reversed depth test (greater-is-closer).
@@ -312,11 +344,20 @@ impl Placement<'_> {
             }
         };
         let clip_from_world = DMat4::from_cols(x_row, y_row, z_row, w_row).transpose();
+        let (lo, hi) = self
+            .focus
+            .iter()
+            .chain(self.depth_points)
+            .map(|&p| light_distance(&self.frame, p))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+        let span = (hi - lo).max(1e-9 * lo.abs().max(hi.abs()).max(f64::MIN_POSITIVE));
+        let light_distance = LightDistance { min: lo - pad * span, max: hi + pad * span };
         LightMatrix {
             clip_from_world,
             frame: self.frame,
             homography,
             depth,
+            light_distance,
             map_size: self.map,
             reverse_depth_test: false,
             needs_unclipped_depth,

@@ -151,7 +151,11 @@ pub(super) fn extremes(
             continue;
         }
         by_error.sort_unstable();
-        let picks = [("best", by_error[0].1), ("median", by_error[by_error.len() / 2].1), ("worst", by_error[by_error.len() - 1].1)];
+        let picks = [
+            ("best", by_error[0].1),
+            ("median", by_error[by_error.len() / 2].1),
+            ("worst", by_error[by_error.len() - 1].1),
+        ];
         for (which, index) in picks {
             let light = light_for(config, runner.scene(), index);
             let (ray, focused) = runner.truths(light)?;

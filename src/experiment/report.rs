@@ -304,8 +304,11 @@ pub(super) fn summarize(
                 .methods
                 .iter()
                 .map(|&other| {
-                    let v: Vec<u64> =
-                        per_method(other).into_iter().filter(|(c, _)| worst_configs.contains(c)).map(|(_, e)| e).collect();
+                    let v: Vec<u64> = per_method(other)
+                        .into_iter()
+                        .filter(|(c, _)| worst_configs.contains(c))
+                        .map(|(_, e)| e)
+                        .collect();
                     mean(&v)
                 })
                 .collect();
@@ -382,7 +385,10 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
         config.truth,
         summary.elapsed.as_secs_f64()
     );
-    let _ = writeln!(md, "Mean misclassified pixels per configuration (lower is better); rows as in the paper's Table 1.\n");
+    let _ = writeln!(
+        md,
+        "Mean misclassified pixels per configuration (lower is better); rows as in the paper's Table 1.\n"
+    );
     let _ = writeln!(md, "| configurations | {} |", names.join(" | "));
     let _ = writeln!(md, "|---|{}", "---:|".repeat(names.len()));
     let cells = |v: &[f64]| v.iter().map(|x| format!("{x:.1}")).collect::<Vec<_>>().join(" | ");
@@ -391,7 +397,8 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
     for (m, means) in &summary.worst {
         let _ = writeln!(md, "| worst 10% of {} | {} |", m.name(), cells(means));
     }
-    let _ = writeln!(md, "\n| method | configs | mean | median | total | % more than optimized | failures | mean frames |");
+    let _ =
+        writeln!(md, "\n| method | configs | mean | median | total | % more than optimized | failures | mean frames |");
     let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|");
     for m in &summary.methods {
         let _ = writeln!(

@@ -8,7 +8,7 @@ use glam::DVec3;
 
 use super::{camera_for, light_for, load_scene, ExperimentConfig, ExperimentError};
 use crate::optimize::{AnalysisKind, Optimizer, Readback, SampleOptions, ScheduleOptions, ShadowScheduler};
-use crate::render::{AnalysisRequest, Frame, Renderer, RendererOptions};
+use crate::render::{AnalysisRequest, Frame, Renderer};
 use crate::{Camera, LightMatrix, Parameterization, Samples, ShadowMapSize, ShadowProblem};
 
 /// What to time.
@@ -82,7 +82,7 @@ pub fn run_timing(
 ) -> Result<Vec<TimingRow>, ExperimentError> {
     let scene = load_scene(&config.scene)?;
     let base = camera_for(config, &scene)?;
-    let mut renderer = Renderer::new(device, queue, &scene, RendererOptions::default())?;
+    let mut renderer = Renderer::new(device, queue, &scene, super::experiment_renderer_options())?;
     let bounds = scene.bounds();
     let mut rows = Vec::new();
     for &map in &options.maps {
@@ -103,7 +103,9 @@ pub fn run_timing(
                         .collect::<Result<_, _>>()?;
                     let solve = |p: &ShadowProblem, param: &Parameterization| p.solve(param);
                     let matrices: Vec<LightMatrix> = match pipeline {
-                        Pipeline::Focused => problems.iter().map(|p| solve(p, &Parameterization::Focused)).collect::<Result<_, _>>()?,
+                        Pipeline::Focused => {
+                            problems.iter().map(|p| solve(p, &Parameterization::Focused)).collect::<Result<_, _>>()?
+                        }
                         Pipeline::LiSpsm => problems
                             .iter()
                             .map(|p| solve(p, &Parameterization::LiSpsm(Default::default())))
@@ -121,7 +123,8 @@ pub fn run_timing(
                                     normals: Some(&normals),
                                 };
                                 for (i, p) in problems.iter().enumerate() {
-                                    let samples = Samples::from_readback(p, &input, i as u32, &SampleOptions::default())?;
+                                    let samples =
+                                        Samples::from_readback(p, &input, i as u32, &SampleOptions::default())?;
                                     if scheduler.update(i, &samples, frame as u64).is_ok() {
                                         optimizations += usize::from(frame >= options.warmup);
                                     }
@@ -141,7 +144,10 @@ pub fn run_timing(
                     let analysis = match (pipeline, scheduler.plan(frame as u64).analysis) {
                         (Pipeline::Optimized, Some(kind)) => {
                             focused = if kind == AnalysisKind::Focused {
-                                problems.iter().map(|p| solve(p, &Parameterization::Focused)).collect::<Result<_, _>>()?
+                                problems
+                                    .iter()
+                                    .map(|p| solve(p, &Parameterization::Focused))
+                                    .collect::<Result<_, _>>()?
                             } else {
                                 Vec::new()
                             };
@@ -149,7 +155,8 @@ pub fn run_timing(
                         }
                         _ => None,
                     };
-                    let report = renderer.render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })?;
+                    let report =
+                        renderer.render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })?;
                     // At most one frame in flight: wait for the previous one.
                     if let Some(prev) = previous.replace(report.submission) {
                         renderer.wait_for(&prev)?;

@@ -4,9 +4,12 @@
 //!
 //! 1. **Shadow passes** (`shaders/shadow.wgsl`): depth only, one per light,
 //!    into one layer each of a `Depth32Float` array; each map is sized by its
-//!    [`LightMatrix::map_size`], rendered with a reversed depth test when
-//!    [`LightMatrix::reverse_depth_test`] is set and with unclipped depth when
-//!    [`LightMatrix::needs_unclipped_depth`] is set and the device has
+//!    [`LightMatrix::map_size`], storing *linear* light depth (distance
+//!    along the light's rays, normalized to
+//!    [`LightMatrix::light_distance`]), which grows away from the light for
+//!    every matrix, so the ordinary depth test serves all of them
+//!    ([`LightMatrix::reverse_depth_test`] does not apply); with unclipped
+//!    depth when [`LightMatrix::needs_unclipped_depth`] is set and the device has
 //!    `DEPTH_CLIP_CONTROL`. Bias: [`ShadowBias`], the same for every method.
 //! 2. **Camera pass** (`shaders/camera.wgsl`): the camera's view with hard
 //!    shadows of up to 32 lights (points outside a map count as lit);
@@ -116,18 +119,18 @@ pub enum RenderError {
 
 /// The depth bias of every shadow map, the same for every method.
 ///
-/// The rasterizer adds `slope_scale · m + constant · r` to each shadow-map
-/// depth, where `m = max(|∂z/∂x|, |∂z/∂y|)` is the primitive's depth slope
-/// per texel and `r` the smallest depth step at the primitive's depth (for
-/// `Depth32Float`, `2^(e - 23)` with `e` the exponent of its largest depth),
-/// clamped to `clamp` when that is non-zero. A receiver looked up at most
-/// half a texel from a texel centre along each axis differs from the stored
-/// depth by at most `m` (for depth linear in the map), so `slope_scale >= 1`
-/// prevents self-shadowing of planar surfaces; `2` leaves room for the
-/// non-linear depth of perspective maps (PSM, LiSPSM, point lights). The
-/// bias is applied away from the light: subtracted under a reversed depth
-/// test. No normal offset is used at lookup, so the only method-dependent
-/// effect is through each map's own slopes, as in the papers.
+/// Shadow maps store *linear* light depth (distance along the light's rays,
+/// normalized to the matrix's [`LightDistance`](crate::LightDistance) range;
+/// see `shaders/shadow.wgsl`), and `fs_shadow` adds
+/// `slope_scale · m + constant · 2⁻²⁴` to it, where
+/// `m = max(|∂z/∂x|, |∂z/∂y|)` is the stored depth's slope per texel,
+/// clamped to `clamp` when that is non-zero. A receiver looked up at most half
+/// a texel from a texel centre differs from the stored depth by at most `m`
+/// on a plane, so `slope_scale >= 1` prevents self-shadowing of planar
+/// surfaces; `2` leaves room. Because the depth is linear, `m` depends only
+/// on the surface's angle to the light rays and the texel's size, never on
+/// how a warped map spends its projective depth. No normal offset is used at
+/// lookup, so the only method-dependent effect is each map's own texel size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowBias {
     /// In units of the smallest depth step `r`.
@@ -144,17 +147,58 @@ impl Default for ShadowBias {
     }
 }
 
-impl ShadowBias {
-    /// The bias as wgpu wants it, negated for a reversed depth test.
-    #[must_use]
-    pub fn depth_bias_state(&self, reversed: bool) -> wgpu::DepthBiasState {
-        let sign = if reversed { -1 } else { 1 };
-        wgpu::DepthBiasState {
-            constant: sign * self.constant,
-            slope_scale: sign as f32 * self.slope_scale,
-            clamp: self.clamp,
-        }
+/// Which faces the shadow pass draws.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowFaces {
+    /// Every triangle (works for open and inconsistently wound meshes; needs
+    /// the slope-scaled [`ShadowBias`] against self-shadowing).
+    #[default]
+    Both,
+    /// Only triangles facing away from the light ("second-depth" shadow
+    /// maps, Wang & Molnar 1994): lit surfaces are compared with the far side
+    /// of their occluders, so no slope-scaled bias is needed and edge-on
+    /// casters are never pushed behind their receivers. Needs closed meshes
+    /// wound counter-clockwise seen from outside (the procedural scene's).
+    /// Mirrored light matrices are detected (`det(clip_from_world) < 0`) and
+    /// cull the other winding.
+    AwayFromLight,
+}
+
+/// The winding cull that keeps only faces turned away from the light of `m`:
+/// a small triangle facing the light is projected by `m`, and by a standard
+/// camera a triangle facing that camera (whose front faces are
+/// counter-clockwise in wgpu); the same sign of their signed areas means the
+/// light sees its facing triangles as front faces, which are then culled.
+/// (The 4x4 determinant does not decide this: the depth row's sign enters it
+/// but not the 2D winding.)
+fn away_from_light_cull(m: &LightMatrix) -> wgpu::Face {
+    let centre = m.clip_from_world.inverse().project_point3(glam::DVec3::new(0.0, 0.0, 0.5));
+    let towards_light = match m.frame {
+        crate::LightFrame::Perspective { position, .. } => position - centre,
+        crate::LightFrame::Orthographic { rotation } => -rotation.row(2),
+    };
+    let light = facing_winding(&m.clip_from_world, centre, towards_light);
+    let view = glam::dcamera::rh::view::look_at_mat4(glam::DVec3::Z, glam::DVec3::ZERO, glam::DVec3::Y);
+    let proj = glam::dcamera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 10.0);
+    let reference = facing_winding(&(proj * view), glam::DVec3::ZERO, glam::DVec3::Z);
+    if light * reference > 0.0 {
+        wgpu::Face::Front
+    } else {
+        wgpu::Face::Back
     }
+}
+
+/// Signed NDC area of a small triangle at `p` whose counter-clockwise
+/// (outward) side faces `towards`, projected by `m`.
+fn facing_winding(m: &glam::DMat4, p: glam::DVec3, towards: glam::DVec3) -> f64 {
+    let n = towards.normalize_or(glam::DVec3::Y);
+    let (t1, t2) = n.any_orthonormal_pair();
+    // (t1, t2, n) right-handed, so p, p + t1, p + t2 is CCW seen from n.
+    let (t1, t2) = if t1.cross(t2).dot(n) > 0.0 { (t1, t2) } else { (t2, t1) };
+    let size = 1e-3 * p.length().max(1.0);
+    let project = |q: glam::DVec3| m.project_point3(q).truncate();
+    let (a, b, c) = (project(p), project(p + t1 * size), project(p + t2 * size));
+    (b - a).perp_dot(c - a)
 }
 
 /// Settings fixed when the renderer is created.
@@ -166,6 +210,8 @@ pub struct RendererOptions {
     pub readback_slots: usize,
     /// Shadow-map depth bias.
     pub bias: ShadowBias,
+    /// Which faces the shadow pass rasterizes.
+    pub shadow_faces: ShadowFaces,
     /// Light that reaches every surface regardless of shadows, in `[0, 1]`.
     pub ambient: f32,
     /// Clear colour of the camera pass (linear RGB).
@@ -180,6 +226,7 @@ impl Default for RendererOptions {
             analysis_size: (180, 180),
             readback_slots: 3,
             bias: ShadowBias::default(),
+            shadow_faces: ShadowFaces::Both,
             ambient: 0.25,
             background: Vec3::new(0.55, 0.68, 0.85),
             timestamps: true,
@@ -362,7 +409,7 @@ impl Renderer {
             max_texture,
             unclipped_available,
             scene: gpu_scene,
-            shadow: ShadowPass::new(device, options.bias, unclipped_available),
+            shadow: ShadowPass::new(device, unclipped_available),
             passes: ScenePasses::new(device),
             camera_uniforms,
             camera_bindings: lights_buffer("lixel camera pass lights"),
@@ -465,7 +512,7 @@ impl Renderer {
             );
         }
         let shadow_raw: Vec<ShadowPassRaw> =
-            slots.iter().map(|m| ShadowPassRaw::to_raw(m.clip_from_world_f32())).collect();
+            slots.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
         if !shadow_raw.is_empty() {
             self.queue.write_buffer(&self.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
         }
@@ -619,8 +666,14 @@ impl Renderer {
         let mut unavailable = 0;
         let last = slots.len().saturating_sub(1);
         for (i, m) in slots.iter().enumerate() {
-            let reversed = m.reverse_depth_test;
-            let (pipeline, unclipped) = self.shadow.pipeline(reversed, m.needs_unclipped_depth);
+            // Linear light depth grows away from the light whatever the
+            // matrix's own depth row does, so the ordinary test always applies.
+            let reversed = false;
+            let cull = match self.options.shadow_faces {
+                ShadowFaces::Both => None,
+                ShadowFaces::AwayFromLight => Some(away_from_light_cull(m)),
+            };
+            let (pipeline, unclipped) = self.shadow.pipeline(reversed, m.needs_unclipped_depth, cull);
             if m.needs_unclipped_depth && !unclipped {
                 unavailable += 1;
             }

@@ -3,7 +3,6 @@
 use std::borrow::Cow;
 
 use super::uniforms::{ShadowPassRaw, VertexRaw, MAX_LIGHTS, SHADOW_SLOT_STRIDE};
-use super::ShadowBias;
 
 /// Depth format of shadow maps and camera depth buffers.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -23,24 +22,26 @@ fn scene_shader(device: &wgpu::Device, label: &str, source: &'static str) -> wgp
     })
 }
 
-/// The depth-only pass: four pipelines (depth test normal/reversed x depth
-/// clipped/unclipped) sharing one uniform buffer with a slot per light.
+/// The depth-only pass: twelve pipelines (depth test normal/reversed x depth
+/// clipped/unclipped x faces culled: none, front, back) sharing one uniform
+/// buffer with a slot per light.
 pub(crate) struct ShadowPass {
-    /// Indexed by `reversed as usize * 2 + unclipped as usize`; `None` for
-    /// unclipped variants when the device lacks `DEPTH_CLIP_CONTROL`.
-    pipelines: [Option<wgpu::RenderPipeline>; 4],
+    /// Indexed by `cull * 4 + reversed as usize * 2 + unclipped as usize`
+    /// (`cull`: 0 none, 1 front, 2 back); `None` for unclipped variants when
+    /// the device lacks `DEPTH_CLIP_CONTROL`.
+    pipelines: [Option<wgpu::RenderPipeline>; 12],
     pub(crate) uniforms: wgpu::Buffer,
     pub(crate) bind_group: wgpu::BindGroup,
 }
 
 impl ShadowPass {
-    pub(crate) fn new(device: &wgpu::Device, bias: ShadowBias, unclipped_available: bool) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, unclipped_available: bool) -> Self {
         let module = scene_shader(device, "lixel shadow shader", include_str!("../../shaders/shadow.wgsl"));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel shadow bind group layout"),
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: true,
@@ -73,10 +74,11 @@ impl ShadowPass {
             }],
         });
         let pipelines = std::array::from_fn(|k| {
-            let (reversed, unclipped) = (k / 2 == 1, k % 2 == 1);
+            let (cull, reversed, unclipped) = (k / 4, (k / 2) % 2 == 1, k % 2 == 1);
+            let cull_mode = [None, Some(wgpu::Face::Front), Some(wgpu::Face::Back)][cull];
             (!unclipped || unclipped_available).then(|| {
                 let label = format!(
-                    "lixel shadow pipeline ({}, {})",
+                    "lixel shadow pipeline ({}, {}, cull {cull_mode:?})",
                     if reversed { "reversed depth" } else { "depth" },
                     if unclipped { "unclipped" } else { "clipped" }
                 );
@@ -90,9 +92,9 @@ impl ShadowPass {
                         buffers: &[Some(VertexRaw::position_layout())],
                     },
                     primitive: wgpu::PrimitiveState {
-                        // Both faces: meshes from OBJ files need not be closed
-                        // or consistently wound, and the ray caster does the same.
-                        cull_mode: None,
+                        // `ShadowFaces::Both` (no culling) by default: meshes from
+                        // OBJ files need not be closed or consistently wound.
+                        cull_mode,
                         unclipped_depth: unclipped,
                         ..Default::default()
                     },
@@ -106,10 +108,16 @@ impl ShadowPass {
                             wgpu::CompareFunction::Less
                         }),
                         stencil: wgpu::StencilState::default(),
-                        bias: bias.depth_bias_state(reversed),
+                        // The bias is applied in fs_shadow, on linear depth.
+                        bias: wgpu::DepthBiasState::default(),
                     }),
                     multisample: wgpu::MultisampleState::default(),
-                    fragment: None,
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_shadow"),
+                        compilation_options: Default::default(),
+                        targets: &[],
+                    }),
                     multiview_mask: None,
                     cache: None,
                 })
@@ -120,8 +128,18 @@ impl ShadowPass {
 
     /// The pipeline for a light; `unclipped` falls back to clipped when
     /// the device cannot do it (the returned flag says which was used).
-    pub(crate) fn pipeline(&self, reversed: bool, unclipped: bool) -> (&wgpu::RenderPipeline, bool) {
-        let base = usize::from(reversed) * 2;
+    pub(crate) fn pipeline(
+        &self,
+        reversed: bool,
+        unclipped: bool,
+        cull: Option<wgpu::Face>,
+    ) -> (&wgpu::RenderPipeline, bool) {
+        let cull = match cull {
+            None => 0,
+            Some(wgpu::Face::Front) => 1,
+            Some(wgpu::Face::Back) => 2,
+        };
+        let base = cull * 4 + usize::from(reversed) * 2;
         match &self.pipelines[base + usize::from(unclipped)] {
             Some(p) => (p, unclipped),
             None => (self.pipelines[base].as_ref().expect("clipped pipelines always exist"), false),

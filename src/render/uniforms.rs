@@ -2,15 +2,12 @@
 //! domain type with `to_raw`.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
 use crate::{Camera, LightFrame, LightMatrix};
 
 /// Lights a camera or analysis pass can look up (the bit width of the masks).
 pub const MAX_LIGHTS: usize = 32;
-
-/// `Light::flags` bit: reversed depth test (see `common.wgsl`).
-pub(crate) const LIGHT_REVERSED_DEPTH: u32 = 1;
 
 /// Stride between the per-light slots of the shadow pass's uniform buffer:
 /// wgpu's default `min_uniform_buffer_offset_alignment`.
@@ -45,23 +42,28 @@ pub(crate) struct LightRaw {
     map_size: [f32; 2],
     layer: u32,
     flags: u32,
+    /// Linear depth: (min distance, 1 / (max - min), 0, 0).
+    depth: [f32; 4],
 }
 
 impl LightRaw {
     /// The light of `matrix`, whose map is in array layer `layer`.
     pub(crate) fn to_raw(matrix: &LightMatrix, layer: u32, color: Vec3) -> Self {
-        // The point the light comes from, homogeneous: (p, 1) or (-d, 0).
-        let position = match matrix.frame {
-            LightFrame::Perspective { position, .. } => position.as_vec3().extend(1.0),
-            LightFrame::Orthographic { rotation } => (-rotation.row(2).as_vec3()).extend(0.0),
-        };
+        let position = light_position(matrix);
         Self {
             clip_from_world: matrix.clip_from_world_f32().to_cols_array_2d(),
             position: position.to_array(),
             color: color.extend(0.0).to_array(),
             map_size: [matrix.map_size.width as f32, matrix.map_size.height as f32],
             layer,
-            flags: if matrix.reverse_depth_test { LIGHT_REVERSED_DEPTH } else { 0 },
+            // Linear depth (see shadow.wgsl) never needs the reversed test.
+            flags: 0,
+            depth: [
+                matrix.light_distance.min as f32,
+                (1.0 / (matrix.light_distance.max - matrix.light_distance.min)) as f32,
+                0.0,
+                0.0,
+            ],
         }
     }
 }
@@ -91,12 +93,38 @@ impl LightsRaw {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct ShadowPassRaw {
     clip_from_world: [[f32; 4]; 4],
-    _pad: [f32; 48],
+    /// Homogeneous light position: (p, 1) or (-d, 0).
+    position: [f32; 4],
+    /// Linear depth: (min distance, 1 / (max - min), constant bias, slope scale).
+    depth: [f32; 4],
+    /// (bias clamp, 0, 0, 0).
+    clamp: [f32; 4],
+    _pad: [f32; 36],
 }
 
 impl ShadowPassRaw {
-    pub(crate) fn to_raw(clip_from_world: Mat4) -> Self {
-        Self { clip_from_world: clip_from_world.to_cols_array_2d(), _pad: [0.0; 48] }
+    pub(crate) fn to_raw(matrix: &LightMatrix, bias: &crate::render::ShadowBias) -> Self {
+        Self {
+            clip_from_world: matrix.clip_from_world_f32().to_cols_array_2d(),
+            position: light_position(matrix).to_array(),
+            depth: [
+                matrix.light_distance.min as f32,
+                (1.0 / (matrix.light_distance.max - matrix.light_distance.min)) as f32,
+                // In units of 2^-24, the float spacing just below 1.
+                bias.constant as f32 * 2f32.powi(-24),
+                bias.slope_scale,
+            ],
+            clamp: [bias.clamp, 0.0, 0.0, 0.0],
+            _pad: [0.0; 36],
+        }
+    }
+}
+
+/// The point the light comes from, homogeneous: (p, 1) or (-d, 0).
+fn light_position(matrix: &LightMatrix) -> glam::Vec4 {
+    match matrix.frame {
+        LightFrame::Perspective { position, .. } => position.as_vec3().extend(1.0),
+        LightFrame::Orthographic { rotation } => (-rotation.row(2).as_vec3()).extend(0.0),
     }
 }
 
@@ -134,5 +162,5 @@ impl VertexRaw {
 }
 
 const _: () = assert!(std::mem::size_of::<ShadowPassRaw>() as u64 == SHADOW_SLOT_STRIDE);
-const _: () = assert!(std::mem::size_of::<LightRaw>() == 112);
+const _: () = assert!(std::mem::size_of::<LightRaw>() == 128);
 const _: () = assert!(std::mem::size_of::<VertexRaw>() == 28);
