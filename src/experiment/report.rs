@@ -97,10 +97,13 @@ pub(super) struct ConfigWriter {
 }
 
 fn settings_text(config: &ExperimentConfig) -> String {
-    // Everything that changes the numbers (not the output directory or --resume).
+    // Everything that changes a configuration's numbers: not the output
+    // directory, --resume, or the number of configurations (each light is
+    // seeded by its own index, so a run can also be resumed to more of them).
     let mut c = config.clone();
     c.out = PathBuf::new();
     c.resume = false;
+    c.configs = 0;
     format!("{c:#?}\n")
 }
 

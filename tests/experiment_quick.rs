@@ -1,0 +1,80 @@
+//! `lixel experiment --preset quick` end to end: the report files, their
+//! invariants, determinism and `--resume`.
+#![cfg(feature = "render")]
+
+#[path = "render_common/mod.rs"]
+mod render_common;
+
+use lixel::experiment::{self, ExperimentConfig, MethodKind, Preset};
+
+fn config(out: &std::path::Path) -> ExperimentConfig {
+    ExperimentConfig {
+        out: out.to_path_buf(),
+        configs: 4,
+        equivalence_configs: 1,
+        ..ExperimentConfig::preset(Preset::Quick)
+    }
+}
+
+fn csv_rows(path: &std::path::Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path).unwrap().lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect()
+}
+
+#[test]
+fn quick_preset_writes_a_consistent_report_deterministically_and_resumes() {
+    let Some((device, queue)) = render_common::gpu() else { return };
+    let dir = std::env::temp_dir().join(format!("lixel-experiment-{}", std::process::id()));
+    let (first, second) = (dir.join("first"), dir.join("second"));
+    let _ = std::fs::remove_dir_all(&dir);
+
+    let c = config(&first);
+    let summary = experiment::run(&c, &device, &queue, &mut |_| {}).unwrap();
+    for file in ["summary.csv", "configs.csv", "report.md", "settings.txt", "sorted-errors.png"] {
+        assert!(first.join(file).is_file(), "{file} missing");
+    }
+    let images = std::fs::read_dir(first.join("images")).unwrap().count();
+    assert!(images >= c.methods.len(), "only {images} images");
+
+    // summary.csv: one row per method, the required columns first.
+    let header = std::fs::read_to_string(first.join("summary.csv")).unwrap();
+    assert!(header.starts_with("method,configs,mean_misclassified,total_misclassified,percent_more_than_optimized"));
+    let summary_rows = csv_rows(&first.join("summary.csv"));
+    assert_eq!(summary_rows.len(), c.methods.len());
+    for m in MethodKind::ALL {
+        assert!(summary_rows.iter().any(|r| r[0] == m.name()), "{} missing from summary.csv", m.name());
+    }
+    // configs.csv: every configuration has every method; counts within the pixel totals.
+    let rows = csv_rows(&first.join("configs.csv"));
+    assert_eq!(rows.len(), c.configs * c.methods.len());
+    let pixels = u64::from(c.screen) * u64::from(c.screen);
+    for r in &rows {
+        let (counted, mis): (u64, u64) = (r[5].parse().unwrap(), r[6].parse().unwrap());
+        let (false_shadow, false_lit): (u64, u64) = (r[7].parse().unwrap(), r[8].parse().unwrap());
+        assert!(counted <= pixels && mis <= counted && mis == false_shadow + false_lit, "{r:?}");
+        assert!(counted > 0, "nothing counted: {r:?}");
+    }
+    // The two ground truths agree on at least 99% of counted pixels.
+    let agreement = summary.truth_agreement.expect("the quick preset computes both truths");
+    assert!(agreement >= 0.99, "truths agree on only {:.3}%", 100.0 * agreement);
+    let report = std::fs::read_to_string(first.join("report.md")).unwrap();
+    assert!(report.contains("| all |") && report.contains("worst 10% of optimized"));
+
+    // Same seed, same configs.csv; an interrupted run resumes to the same file.
+    let c2 = config(&second);
+    let _ = experiment::run(&ExperimentConfig { configs: 2, ..c2.clone() }, &device, &queue, &mut |_| {}).unwrap();
+    // Simulate an interruption in the middle of configuration 1.
+    let path = second.join("configs.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let keep: Vec<&str> = text.lines().take(1 + c.methods.len() + 2).collect();
+    std::fs::write(&path, keep.join("\n") + "\n").unwrap();
+    let mut done = Vec::new();
+    let _ =
+        experiment::run(&ExperimentConfig { resume: true, ..c2 }, &device, &queue, &mut |p| done.push(p.done)).unwrap();
+    assert_eq!(done.first(), Some(&1), "configuration 0 should have been kept");
+    assert_eq!(
+        std::fs::read_to_string(first.join("configs.csv")).unwrap(),
+        std::fs::read_to_string(&path).unwrap(),
+        "a resumed run with the same seed must reproduce configs.csv"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
