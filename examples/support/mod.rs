@@ -244,6 +244,7 @@ pub fn run_loop(
     let bounds = scene.bounds();
     let cadence = Cadence::default();
     let mut adaptive: Option<AdaptiveLights> = None;
+    let mut optimizer = lixel::Optimizer::new(Default::default());
     let mut records: Vec<FrameRecord> = Vec::with_capacity(config.frames as usize);
     let mut submissions = std::collections::VecDeque::new();
     let mut previous_start: Option<Instant> = None;
@@ -285,15 +286,14 @@ pub fn run_loop(
                         r.latency.taken.as_secs_f64() * 1e3,
                     ));
                 }
-                // TODO(merge): the optimizer plugs in here:
-                //   |light, readback, previous| lixel::optimize_light_matrix(&problems[light], readback, previous).ok()
-                // Until then the stand-in keeps the previous matrix, and the
-                // refit below (focused for the current camera and light)
-                // stands in for the optimizer's per-frame rescale and shift.
-                record.matrices_updated = adaptive.update(readback.as_ref(), |_, _, _| None);
-                for (light, matrix) in focused.iter().enumerate() {
-                    adaptive.set(light, *matrix);
-                }
+                // The optimizer: samples of each light from the readback (for
+                // the camera it was rendered with), optimized against the
+                // light's current matrix; a failure keeps that matrix.
+                let map = ShadowMapSize::square(config.map);
+                record.matrices_updated = adaptive.update(readback.as_ref(), |light, readback, previous| {
+                    let samples = readback.samples(lights[light], bounds, map, light as u32).ok()?;
+                    optimizer.optimize(&samples, Some(previous)).ok().map(|o| o.matrix)
+                });
                 (adaptive.matrices().to_vec(), Some(focused), cadence.analysis_for(n))
             }
         };

@@ -26,9 +26,7 @@ use glam::{DVec3, UVec2};
 
 use crate::mesh::{RayCaster, Scene, ShadowMasks};
 use crate::optimize::{OptimizeOptions, Optimizer, Readback, SampleOptions, SearchStrategy};
-use crate::render::{
-    AnalysisReadback, AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces,
-};
+use crate::render::{AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces};
 use crate::{
     Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, Samples, ShadowMapSize, ShadowProblem,
 };
@@ -537,7 +535,7 @@ impl<'a> Runner<'a> {
                 }
                 self.renderer.wait_idle()?;
             };
-            let (bits, normals) = optimizer_inputs(&readback);
+            let (bits, normals) = readback.optimizer_buffers();
             let input = Readback {
                 width: readback.masks.width,
                 height: readback.masks.height,
@@ -629,25 +627,6 @@ pub fn experiment_renderer_options() -> RendererOptions {
         bias: ShadowBias::default(),
         ..RendererOptions::default()
     }
-}
-
-/// The analysis pass's bits as the optimizer wants them: "not lit by light
-/// i" (shadowed, or facing away as a shadow-map test finds it), and unpacked
-/// normals.
-fn optimizer_inputs(readback: &AnalysisReadback) -> (Vec<u32>, Vec<[f32; 3]>) {
-    let masks = &readback.masks;
-    let bits = masks
-        .shadow
-        .iter()
-        .zip(&masks.facing)
-        .enumerate()
-        .map(|(i, (&s, &f))| if masks.visible(i) { s | !f } else { 0 })
-        .collect();
-    let normals = (0..masks.height)
-        .flat_map(|y| (0..masks.width).map(move |x| (x, y)))
-        .map(|(x, y)| readback.normal(x, y).to_array())
-        .collect();
-    (bits, normals)
 }
 
 /// The smallest view depth of any visible pixel of `masks`.

@@ -113,7 +113,7 @@ pub fn run_timing(
                         Pipeline::Optimized => {
                             // Consume a readback if one has arrived (never wait).
                             if let Some(readback) = renderer.try_take_analysis() {
-                                let (bits, normals) = super::optimizer_inputs(&readback);
+                                let (bits, normals) = readback.optimizer_buffers();
                                 let masks = &readback.masks;
                                 let input = Readback {
                                     width: masks.width,

@@ -72,6 +72,52 @@ impl AnalysisReadback {
         Self { frame, latency, camera: meta.camera, lights: meta.lights, tag: meta.tag, masks, packed_normals }
     }
 
+    /// The buffers [`Samples::from_readback`](crate::Samples::from_readback)
+    /// wants: per pixel, bit `i` set when light `i` does not light it
+    /// (shadowed, or facing away, as a shadow-map test finds it), and the
+    /// unpacked normals.
+    #[must_use]
+    pub fn optimizer_buffers(&self) -> (Vec<u32>, Vec<[f32; 3]>) {
+        let masks = &self.masks;
+        let bits = masks
+            .shadow
+            .iter()
+            .zip(&masks.facing)
+            .enumerate()
+            .map(|(i, (&s, &f))| if masks.visible(i) { s | !f } else { 0 })
+            .collect();
+        let normals = (0..masks.height)
+            .flat_map(|y| (0..masks.width).map(move |x| (x, y)))
+            .map(|(x, y)| self.normal(x, y).to_array())
+            .collect();
+        (bits, normals)
+    }
+
+    /// The optimizer's samples of light `index` (`light` itself, scene
+    /// `bounds`, map size `map`), for the camera this pass was rendered with.
+    ///
+    /// # Errors
+    /// Whatever [`ShadowProblem::new`] or
+    /// [`Samples::from_readback`](crate::Samples::from_readback) reports.
+    pub fn samples(
+        &self,
+        light: crate::Light,
+        bounds: crate::SceneBounds,
+        map: crate::ShadowMapSize,
+        index: u32,
+    ) -> crate::Result<crate::Samples> {
+        let problem = crate::ShadowProblem::new(self.camera, light, bounds, map)?;
+        let (bits, normals) = self.optimizer_buffers();
+        let input = crate::optimize::Readback {
+            width: self.masks.width,
+            height: self.masks.height,
+            depth: &self.masks.depth,
+            shadow_bits: &bits,
+            normals: Some(&normals),
+        };
+        crate::Samples::from_readback(&problem, &input, index, &crate::optimize::SampleOptions::default())
+    }
+
     /// The unit surface normal at pixel `(x, y)` (zero for background).
     #[must_use]
     pub fn normal(&self, x: u32, y: u32) -> Vec3 {
