@@ -22,7 +22,8 @@ fn scene() -> SyntheticScene {
             s.spheres.push(Sphere { center: at + DVec3::Y * rng.random_range(r..r + 2.0), radius: r });
         } else {
             let size = DVec3::new(rng.random_range(0.4..3.0), rng.random_range(0.5..5.0), rng.random_range(0.4..3.0));
-            s.boxes.push(Aabb::from_corners(at - size * DVec3::new(0.5, 0.0, 0.5), at + size * DVec3::new(0.5, 1.0, 0.5)));
+            s.boxes
+                .push(Aabb::from_corners(at - size * DVec3::new(0.5, 0.0, 0.5), at + size * DVec3::new(0.5, 1.0, 0.5)));
         }
     }
     s
@@ -67,7 +68,8 @@ fn optimize_lights(setup: &Setup, optimizer: &mut Optimizer) -> usize {
     let readback = setup.readback.as_readback(false);
     let mut boundary = 0;
     for (bit, problem) in setup.problems.iter().enumerate() {
-        let samples = Samples::from_readback(problem, &readback, bit as u32, &SampleOptions::default()).expect("samples");
+        let samples =
+            Samples::from_readback(problem, &readback, bit as u32, &SampleOptions::default()).expect("samples");
         boundary += samples.boundary().len();
         let result = optimizer.optimize(&samples, None).expect("optimize");
         std::hint::black_box(result);
