@@ -5,8 +5,9 @@
 mod render_common;
 
 use lixel::mesh::RayCaster;
-use lixel::render::{AdaptiveLights, AnalysisRequest, Frame, Renderer, RendererOptions};
-use lixel::Parameterization;
+use lixel::optimize::{Optimizer, ScheduleOptions, ShadowScheduler};
+use lixel::render::{AnalysisRequest, Frame, Renderer, RendererOptions};
+use lixel::{LightMatrix, Parameterization, ShadowMapSize};
 use render_common::*;
 
 fn renderer(device: &wgpu::Device, queue: &wgpu::Queue, slots: usize) -> Renderer {
@@ -72,35 +73,38 @@ fn a_full_ring_skips_analysis_instead_of_waiting() {
 }
 
 /// A readback that never arrives leaves the previous matrices in place,
-/// while frames go on; once data arrives the optimizer's matrices are used.
+/// while frames go on; once data arrives the optimizer updates them.
 #[test]
 fn a_missing_readback_keeps_the_previous_matrices() {
     let Some((device, queue)) = gpu() else { return };
     let mut renderer = renderer(&device, &queue, 2);
     let scene = tiny_scene();
     let camera = walkthrough_camera(128);
-    let focused = matrices(&scene, &camera, &test_lights(), 256, &Parameterization::Focused);
-    let lispsm = matrices(&scene, &camera, &test_lights(), 256, &Parameterization::LiSpsm(Default::default()));
-    let mut adaptive = AdaptiveLights::new(focused.clone());
-    // Stand-in optimizer: switch to LiSPSM.
-    let optimize = |light: usize, _: &_, _: &_| Some(lispsm[light]);
+    let lights = test_lights();
+    let map = ShadowMapSize::square(256);
+    let focused = matrices(&scene, &camera, &lights, 256, &Parameterization::Focused);
+    let mut scheduler =
+        ShadowScheduler::new(lights.len(), ScheduleOptions::default(), Optimizer::new(Default::default())).unwrap();
+    for (light, m) in focused.iter().enumerate() {
+        scheduler.set_matrix(light, *m);
+    }
+    let current =
+        |s: &ShadowScheduler| -> Vec<LightMatrix> { (0..lights.len()).map(|i| *s.matrix(i).unwrap()).collect() };
     for _ in 0..9 {
-        let frame = Frame {
-            camera: &camera,
-            lights: adaptive.matrices(),
-            masks: false,
-            analysis: Some(AnalysisRequest::default()),
-        };
+        let lights_now = current(&scheduler);
+        let frame =
+            Frame { camera: &camera, lights: &lights_now, masks: false, analysis: Some(AnalysisRequest::default()) };
         renderer.render(&frame).unwrap();
-        // The readback never arrives: nothing is taken.
-        assert_eq!(adaptive.update(None, optimize), 0);
-        assert_eq!(adaptive.matrices(), &focused[..]);
+        // The readback never arrives: nothing is taken, nothing updated.
+        assert_eq!(current(&scheduler), focused);
+        assert!((0..lights.len()).all(|i| scheduler.optimized_frame(i).is_none()));
     }
     assert_eq!(renderer.next_frame(), 9);
     renderer.wait_idle().unwrap();
-    let readback = renderer.try_take_analysis();
-    assert!(readback.is_some());
-    assert_eq!(adaptive.update(readback.as_ref(), optimize), 2);
-    assert_eq!(adaptive.matrices(), &lispsm[..]);
-    assert!(adaptive.updated_in().iter().all(|f| f.is_some()));
+    let readback = renderer.try_take_analysis().expect("the readback arrives once the device is idle");
+    for (i, light) in lights.iter().enumerate() {
+        let samples = readback.samples(*light, scene.bounds(), map, i as u32).unwrap();
+        scheduler.update(i, &samples, 9).unwrap();
+        assert_eq!(scheduler.optimized_frame(i), Some(9));
+    }
 }

@@ -237,14 +237,17 @@ pub fn run_loop(
     scene: &Scene,
     config: &LoopConfig,
 ) -> Result<Vec<FrameRecord>, String> {
-    use lixel::render::{AdaptiveLights, AnalysisKind, AnalysisRequest, Cadence, Frame};
+    use lixel::optimize::{AnalysisKind, Optimizer, ScheduleOptions, ShadowScheduler};
+    use lixel::render::{AnalysisRequest, Frame};
     use lixel::{Parameterization, ShadowMapSize, ShadowProblem};
     use std::time::Instant;
 
     let bounds = scene.bounds();
-    let cadence = Cadence::default();
-    let mut adaptive: Option<AdaptiveLights> = None;
-    let mut optimizer = lixel::Optimizer::new(Default::default());
+    // Per-light matrices and the paper's cadence (analysis every 3 frames,
+    // every 5th of them with focused maps), independent of the renderer.
+    let mut scheduler =
+        ShadowScheduler::new(config.lights, ScheduleOptions::default(), Optimizer::new(Default::default()))
+            .map_err(|e| e.to_string())?;
     let mut records: Vec<FrameRecord> = Vec::with_capacity(config.frames as usize);
     let mut submissions = std::collections::VecDeque::new();
     let mut previous_start: Option<Instant> = None;
@@ -276,7 +279,6 @@ pub fn run_loop(
                 // The focused matrices are the starting point and the
                 // standard maps of the periodic standard analysis pass.
                 let focused = solve(&Parameterization::Focused)?;
-                let adaptive = adaptive.get_or_insert_with(|| AdaptiveLights::new(focused.clone()));
                 let readback = renderer.try_take_analysis();
                 if let Some(r) = &readback {
                     record.readback = Some((
@@ -285,23 +287,27 @@ pub fn run_loop(
                         r.latency.ready.as_secs_f64() * 1e3,
                         r.latency.taken.as_secs_f64() * 1e3,
                     ));
+                    // The optimizer: samples of each light from the readback
+                    // (for the camera it was rendered with), optimized against
+                    // the light's current matrix; a failure keeps that matrix.
+                    let map = ShadowMapSize::square(config.map);
+                    for (light, l) in lights.iter().enumerate() {
+                        let Ok(samples) = r.samples(*l, bounds, map, light as u32) else { continue };
+                        if scheduler.update(light, &samples, n).is_ok() {
+                            record.matrices_updated += 1;
+                        }
+                    }
                 }
-                // The optimizer: samples of each light from the readback (for
-                // the camera it was rendered with), optimized against the
-                // light's current matrix; a failure keeps that matrix.
-                let map = ShadowMapSize::square(config.map);
-                record.matrices_updated = adaptive.update(readback.as_ref(), |light, readback, previous| {
-                    let samples = readback.samples(lights[light], bounds, map, light as u32).ok()?;
-                    optimizer.optimize(&samples, Some(previous)).ok().map(|o| o.matrix)
-                });
-                (adaptive.matrices().to_vec(), Some(focused), cadence.analysis_for(n))
+                let current =
+                    focused.iter().enumerate().map(|(i, f)| scheduler.matrix(i).copied().unwrap_or(*f)).collect();
+                (current, Some(focused), scheduler.plan(n).analysis)
             }
         };
         record.solve_ms = solve_start.elapsed().as_secs_f64() * 1e3;
 
         let analysis = analysis_kind.map(|kind| AnalysisRequest {
-            lights: if kind == AnalysisKind::Standard { standard.as_deref() } else { None },
-            tag: kind.tag(),
+            lights: if kind == AnalysisKind::Focused { standard.as_deref() } else { None },
+            tag: u32::from(kind == AnalysisKind::Focused),
         });
         let report = renderer
             .render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })

@@ -31,7 +31,6 @@
 //! [`Renderer::optional_features`] lists the features worth requesting.
 
 mod analysis;
-pub mod frame_loop;
 mod output;
 mod passes;
 pub mod readback;
@@ -47,7 +46,6 @@ use crate::mesh::{MeshError, Scene};
 use crate::{Camera, LightMatrix};
 
 pub use analysis::{AnalysisMeta, AnalysisReadback};
-pub use frame_loop::{AdaptiveLights, AnalysisKind, Cadence};
 pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
 pub use timing::GpuFrameTimes;
