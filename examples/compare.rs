@@ -57,28 +57,8 @@ fn run() -> Result<(), String> {
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
     // Scene-optimized: the frame loop at this fixed view, from the focused
     // map, until the optimizer keeps its previous matrix (at most 12 frames).
-    let mut optimized = problem.solve(&Parameterization::Focused).map_err(|e| e.to_string())?;
-    let mut optimizer = lixel::Optimizer::new(Default::default());
-    for frame in 0..12u32 {
-        let analysis = Some(lixel::render::AnalysisRequest { lights: None, tag: frame });
-        let report = renderer
-            .render(&Frame { camera: &camera, lights: std::slice::from_ref(&optimized), masks: false, analysis })
-            .map_err(|e| e.to_string())?;
-        renderer.wait_for(&report.submission).map_err(|e| e.to_string())?;
-        let readback = loop {
-            if let Some(r) = renderer.try_take_analysis() {
-                break r;
-            }
-            renderer.wait_idle().map_err(|e| e.to_string())?;
-        };
-        let samples =
-            readback.samples(light, scene.bounds(), ShadowMapSize::square(map), 0).map_err(|e| e.to_string())?;
-        let result = optimizer.optimize(&samples, Some(&optimized)).map_err(|e| e.to_string())?;
-        optimized = result.matrix;
-        if !result.report.accepted || result.report.fallback.is_some() {
-            break;
-        }
-    }
+    let optimized =
+        lixel::experiment::settle(&mut renderer, &problem, Default::default(), 12).map_err(|e| e.to_string())?.matrix;
     methods.push(("scene-optimized", optimized));
     let (mut views, mut maps, mut masks) = (Vec::new(), Vec::new(), Vec::new());
     println!("{:<16} {:>14} {:>10}", "method", "misclassified", "fallback");

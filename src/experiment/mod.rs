@@ -434,18 +434,19 @@ impl<'a> Runner<'a> {
         ShadowProblem::new(self.camera, light, self.scene.bounds(), ShadowMapSize::square(map))
     }
 
+    /// Renders the camera view with `matrix` (masks included) and waits for it.
+    fn render_view(&mut self, matrix: &LightMatrix) -> Result<(), ExperimentError> {
+        let lights = std::slice::from_ref(matrix);
+        let report = self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None })?;
+        Ok(self.renderer.wait_for(&report.submission)?)
+    }
+
     /// Renders the camera view with `matrix` and reads back its masks.
     ///
     /// # Errors
     /// Renderer failures.
     pub fn masks(&mut self, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
-        let report = self.renderer.render(&Frame {
-            camera: &self.camera,
-            lights: std::slice::from_ref(matrix),
-            masks: true,
-            analysis: None,
-        })?;
-        self.renderer.wait_for(&report.submission)?;
+        self.render_view(matrix)?;
         Ok(self.renderer.read_masks()?)
     }
 
@@ -454,13 +455,7 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn color(&mut self, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
-        let report = self.renderer.render(&Frame {
-            camera: &self.camera,
-            lights: std::slice::from_ref(matrix),
-            masks: true,
-            analysis: None,
-        })?;
-        self.renderer.wait_for(&report.submission)?;
+        self.render_view(matrix)?;
         Ok(self.renderer.read_color()?)
     }
 
@@ -508,50 +503,16 @@ impl<'a> Runner<'a> {
         Ok((m, 1, note))
     }
 
-    /// The scene-optimized frame loop at a fixed configuration: start from
-    /// the focused map; each frame renders the analysis pass with the current
-    /// matrix, reads it back and optimizes; stop when the optimizer keeps the
-    /// previous matrix (no 20% median improvement) or after the frame cap.
+    /// The scene-optimized frame loop at this configuration (see [`settle`]).
     fn settle(
         &mut self,
         problem: &ShadowProblem,
         strategy: SearchStrategy,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
-        let mut optimizer = Optimizer::new(OptimizeOptions { strategy, ..Default::default() });
-        let mut matrix = problem.solve(&Parameterization::Focused)?;
-        let mut note = String::new();
-        for frame in 1..=self.config.max_optimize_frames.max(1) {
-            let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
-            let report = self.renderer.render(&Frame {
-                camera: &self.camera,
-                lights: std::slice::from_ref(&matrix),
-                masks: false,
-                analysis,
-            })?;
-            self.renderer.wait_for(&report.submission)?;
-            let readback = loop {
-                if let Some(r) = self.renderer.try_take_analysis() {
-                    break r;
-                }
-                self.renderer.wait_idle()?;
-            };
-            let (bits, normals) = readback.optimizer_buffers();
-            let input = Readback {
-                width: readback.masks.width,
-                height: readback.masks.height,
-                depth: &readback.masks.depth,
-                shadow_bits: &bits,
-                normals: Some(&normals),
-            };
-            let samples = Samples::from_readback(problem, &input, 0, &SampleOptions::default())?;
-            let result = optimizer.optimize(&samples, Some(&matrix))?;
-            note = result.report.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
-            matrix = result.matrix;
-            if !result.report.accepted || result.report.fallback.is_some() {
-                return Ok((matrix, frame, note));
-            }
-        }
-        Ok((matrix, self.config.max_optimize_frames.max(1), note))
+        let options = OptimizeOptions { strategy, ..Default::default() };
+        let settled = settle(&mut self.renderer, problem, options, self.config.max_optimize_frames)?;
+        let note = settled.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
+        Ok((settled.matrix, settled.frames, note))
     }
 
     /// Runs configuration `index`.
@@ -627,6 +588,63 @@ pub fn experiment_renderer_options() -> RendererOptions {
         bias: ShadowBias::default(),
         ..RendererOptions::default()
     }
+}
+
+/// The result of [`settle`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settled {
+    /// The matrix the loop settled on.
+    pub matrix: LightMatrix,
+    /// Frames (analysis passes) it took.
+    pub frames: usize,
+    /// The optimizer's last fallback, if any.
+    pub fallback: Option<crate::Fallback>,
+}
+
+/// The scene-optimized frame loop at a fixed view, as in a walkthrough that
+/// pauses: start from the focused map; each frame renders the analysis pass
+/// with the current matrix, reads it back and optimizes; stop when the
+/// optimizer keeps the previous matrix (no 20% median improvement), falls
+/// back, or after `max_frames`.
+///
+/// # Errors
+/// Renderer and solver failures.
+pub fn settle(
+    renderer: &mut Renderer,
+    problem: &ShadowProblem,
+    options: OptimizeOptions,
+    max_frames: usize,
+) -> Result<Settled, ExperimentError> {
+    let mut optimizer = Optimizer::new(options);
+    let mut matrix = problem.solve(&Parameterization::Focused)?;
+    let max_frames = max_frames.max(1);
+    for frame in 1..=max_frames {
+        let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
+        let lights = std::slice::from_ref(&matrix);
+        let report = renderer.render(&Frame { camera: problem.camera(), lights, masks: false, analysis })?;
+        renderer.wait_for(&report.submission)?;
+        let readback = loop {
+            if let Some(r) = renderer.try_take_analysis() {
+                break r;
+            }
+            renderer.wait_idle()?;
+        };
+        let (bits, normals) = readback.optimizer_buffers();
+        let input = Readback {
+            width: readback.masks.width,
+            height: readback.masks.height,
+            depth: &readback.masks.depth,
+            shadow_bits: &bits,
+            normals: Some(&normals),
+        };
+        let samples = Samples::from_readback(problem, &input, 0, &SampleOptions::default())?;
+        let result = optimizer.optimize(&samples, Some(&matrix))?;
+        matrix = result.matrix;
+        if !result.report.accepted || result.report.fallback.is_some() {
+            return Ok(Settled { matrix, frames: frame, fallback: result.report.fallback });
+        }
+    }
+    Ok(Settled { matrix, frames: max_frames, fallback: None })
 }
 
 /// The smallest view depth of any visible pixel of `masks`.
