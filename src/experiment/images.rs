@@ -35,7 +35,7 @@ pub(super) fn legend(config: &ExperimentConfig) -> String {
         })
         .collect();
     format!(
-        "Each line is one method's misclassified pixels per configuration, sorted ascending (x: rank, y: pixels, linear from 0). Colours: {}.",
+        "Each line is one method's misclassified pixels per configuration, sorted ascending (x: rank; y: ln(1 + pixels), from 0 to the largest count). Colours: {}.",
         items.join(", ")
     )
 }
@@ -84,7 +84,9 @@ pub(super) fn sorted_curves(path: &Path, config: &ExperimentConfig, rows: &[Conf
             (m, v)
         })
         .collect();
-    let max = series.iter().flat_map(|(_, v)| v.iter().copied()).max().unwrap_or(1).max(1) as f64;
+    // Logarithmic y (of 1 + pixels): the worst configurations are orders of
+    // magnitude above the typical ones.
+    let max = (series.iter().flat_map(|(_, v)| v.iter().copied()).max().unwrap_or(1).max(1) as f64).ln_1p();
     let axis = Rgba([0, 0, 0, 255]);
     line(&mut img, (margin, h - margin), (w - margin, h - margin), axis);
     line(&mut img, (margin, margin), (margin, h - margin), axis);
@@ -94,7 +96,7 @@ pub(super) fn sorted_curves(path: &Path, config: &ExperimentConfig, rows: &[Conf
         }
         let point = |i: usize, e: u64| {
             let x = margin + ((w - 2 * margin) as f64 * i as f64 / (v.len() - 1).max(1) as f64) as i64;
-            let y = h - margin - ((h - 2 * margin) as f64 * e as f64 / max) as i64;
+            let y = h - margin - ((h - 2 * margin) as f64 * (e as f64).ln_1p() / max) as i64;
             (x, y)
         };
         for i in 1..v.len() {

@@ -12,7 +12,7 @@
 //!    the fixed configuration until the optimizer stops switching);
 //! 3. the camera pass's full-resolution masks; a pixel counts when it is
 //!    visible, on a receiver facing the light, and its bit differs from the
-//!    truth. One bias policy ([`ShadowBias`](crate::render::ShadowBias)'s
+//!    truth. One bias policy ([`ShadowBias`]'s
 //!    default) serves every method.
 
 mod images;

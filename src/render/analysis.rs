@@ -97,7 +97,7 @@ impl AnalysisReadback {
     /// `bounds`, map size `map`), for the camera this pass was rendered with.
     ///
     /// # Errors
-    /// Whatever [`ShadowProblem::new`] or
+    /// Whatever [`ShadowProblem::new`](crate::ShadowProblem::new) or
     /// [`Samples::from_readback`](crate::Samples::from_readback) reports.
     pub fn samples(
         &self,
