@@ -92,13 +92,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let stored = textureLoad(shadow_maps, coords, light.layer, 0);
     // Linear light depth, as the shadow pass stored it (see shadow.wgsl);
     // receivers beyond the far end compare as at it.
-    var distance: f32;
-    if light.position.w > 0.0 {
-        distance = length(world - light.position.xyz);
-    } else {
-        distance = dot(world, -light.position.xyz);
-    }
-    let depth = clamp((distance - light.depth.x) * light.depth.y, 0.0, 1.0);
+    let depth = clamp(linear_light_depth(light.position, light.depth.xy, world), 0.0, 1.0);
     return stored < depth;
 }
 

@@ -45,14 +45,7 @@ fn vs_shadow(@location(0) position: vec3<f32>) -> ShadowVertex {
 // plus slope-scaled on the linear depth.
 @fragment
 fn fs_shadow(in: ShadowVertex) -> @builtin(frag_depth) f32 {
-    let p = shadow_pass.position;
-    var distance: f32;
-    if p.w > 0.0 {
-        distance = length(in.world - p.xyz);
-    } else {
-        distance = dot(in.world, -p.xyz);
-    }
-    let depth = (distance - shadow_pass.depth.x) * shadow_pass.depth.y;
+    let depth = linear_light_depth(shadow_pass.position, shadow_pass.depth.xy, in.world);
     let slope = max(abs(dpdx(depth)), abs(dpdy(depth)));
     var bias = shadow_pass.depth.z + shadow_pass.depth.w * slope;
     if shadow_pass.clamp.x > 0.0 {

@@ -36,7 +36,11 @@ pub(crate) struct ShadowPass {
 
 impl ShadowPass {
     pub(crate) fn new(device: &wgpu::Device, unclipped_available: bool) -> Self {
-        let module = scene_shader(device, "lixel shadow shader", include_str!("../../shaders/shadow.wgsl"));
+        let module = scene_shader(
+            device,
+            "lixel shadow shader",
+            concat!(include_str!("../../shaders/light_depth.wgsl"), include_str!("../../shaders/shadow.wgsl")),
+        );
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel shadow bind group layout"),
             entries: &[wgpu::BindGroupLayoutEntry {
@@ -159,10 +163,16 @@ pub(crate) struct ScenePasses {
 impl ScenePasses {
     pub(crate) fn new(device: &wgpu::Device) -> Self {
         // WGSL has no includes: the shared declarations are prepended.
-        let camera_source =
-            concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/camera.wgsl"));
-        let analysis_source =
-            concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/analysis.wgsl"));
+        let camera_source = concat!(
+            include_str!("../../shaders/light_depth.wgsl"),
+            include_str!("../../shaders/common.wgsl"),
+            include_str!("../../shaders/camera.wgsl")
+        );
+        let analysis_source = concat!(
+            include_str!("../../shaders/light_depth.wgsl"),
+            include_str!("../../shaders/common.wgsl"),
+            include_str!("../../shaders/analysis.wgsl")
+        );
         let camera_module = scene_shader(device, "lixel camera shader", camera_source);
         let analysis_module = scene_shader(device, "lixel analysis shader", analysis_source);
         let uniform = |binding| wgpu::BindGroupLayoutEntry {

@@ -58,12 +58,10 @@ impl LightRaw {
             layer,
             // Linear depth (see shadow.wgsl) never needs the reversed test.
             flags: 0,
-            depth: [
-                matrix.light_distance.min as f32,
-                (1.0 / (matrix.light_distance.max - matrix.light_distance.min)) as f32,
-                0.0,
-                0.0,
-            ],
+            depth: {
+                let [min, inv_span] = linear_depth_range(matrix);
+                [min, inv_span, 0.0, 0.0]
+            },
         }
     }
 }
@@ -107,17 +105,22 @@ impl ShadowPassRaw {
         Self {
             clip_from_world: matrix.clip_from_world_f32().to_cols_array_2d(),
             position: light_position(matrix).to_array(),
-            depth: [
-                matrix.light_distance.min as f32,
-                (1.0 / (matrix.light_distance.max - matrix.light_distance.min)) as f32,
-                // In units of 2^-24, the float spacing just below 1.
-                bias.constant as f32 * 2f32.powi(-24),
-                bias.slope_scale,
-            ],
+            depth: {
+                let [min, inv_span] = linear_depth_range(matrix);
+                // Constant bias in units of 2^-24, the float spacing just below 1.
+                [min, inv_span, bias.constant as f32 * 2f32.powi(-24), bias.slope_scale]
+            },
             clamp: [bias.clamp, 0.0, 0.0, 0.0],
             _pad: [0.0; 36],
         }
     }
+}
+
+/// `(min distance, 1 / (max - min))` of the matrix's light distances: the
+/// `range` of `linear_light_depth` in `shaders/light_depth.wgsl`.
+fn linear_depth_range(matrix: &LightMatrix) -> [f32; 2] {
+    let d = matrix.light_distance;
+    [d.min as f32, (1.0 / (d.max - d.min)) as f32]
 }
 
 /// The point the light comes from, homogeneous: (p, 1) or (-d, 0).
