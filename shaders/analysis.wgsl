@@ -3,10 +3,114 @@
 // bits, light-facing bits and the normal (see `mask_words` in common.wgsl,
 // which is prepended together with the vertex stage `vs_main`).
 //
+// Two sources, one output. Analysis pixel (x, y) always stands for the
+// full-resolution point ((x, y) + 0.5) * viewport / analysis size:
+//
+// - `fs_analysis_depth` (the default) draws one full-screen triangle and
+//   reads the camera pass's depth buffer, so the scene is not drawn a second
+//   time. It reconstructs the surface at that point from the nearest
+//   full-resolution pixel and the one-sided depth differences that continue
+//   its surface (screen-space depth is affine on planes, so this is exact
+//   there), the normal from the same differences, and looks the point up in
+//   the analysis lights' maps.
+// - `fs_analysis_geometry` draws the scene again at the analysis resolution
+//   (interpolated positions and normals).
+//
 // Depth goes out as f32 bits in a u32 channel rather than as a float
 // target, so that the pass also runs where R32Float is not renderable (GL).
 
+@group(0) @binding(3) var camera_depth: texture_depth_2d;
+
 @fragment
-fn fs_analysis(in: VertexOutput) -> @location(0) vec4<u32> {
+fn fs_analysis_geometry(in: VertexOutput) -> @location(0) vec4<u32> {
     return mask_words(in, shade(in));
+}
+
+// One triangle covering the target: (-1, -1), (3, -1), (-1, 3).
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
+// Camera depth at full-resolution pixel `p`; 1.0 (background) outside.
+fn camera_depth_at(p: vec2<i32>, size: vec2<i32>) -> f32 {
+    if any(p < vec2<i32>(0)) || any(p >= size) {
+        return 1.0;
+    }
+    return textureLoad(camera_depth, p, 0);
+}
+
+// Depth change per pixel along one axis, from the side that continues the
+// surface at `centre`: the smaller of the two one-sided differences
+// (background neighbours do not count; 0 when both are background).
+fn depth_slope(before: f32, centre: f32, after: f32) -> f32 {
+    let back = centre - before;
+    let ahead = after - centre;
+    let has_back = before < 1.0;
+    let has_ahead = after < 1.0;
+    if has_back && has_ahead {
+        return select(ahead, back, abs(back) < abs(ahead));
+    }
+    if has_back {
+        return back;
+    }
+    if has_ahead {
+        return ahead;
+    }
+    return 0.0;
+}
+
+// World position of full-resolution screen point `q` (pixels, y down) at
+// depth-buffer value `depth`.
+fn unproject(q: vec2<f32>, depth: f32, size: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>(2.0 * q.x / size.x - 1.0, 1.0 - 2.0 * q.y / size.y);
+    let world = camera.world_from_clip * vec4<f32>(ndc, depth, 1.0);
+    return world.xyz / world.w;
+}
+
+@fragment
+fn fs_analysis_depth(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<u32> {
+    let size_px = vec2<i32>(textureDimensions(camera_depth));
+    let size = vec2<f32>(size_px);
+    // `frag.xy` is the analysis pixel's centre.
+    let q = frag.xy * size / camera.params.yz;
+    let p = clamp(vec2<i32>(floor(q)), vec2<i32>(0), size_px - vec2<i32>(1));
+    let depth = camera_depth_at(p, size_px);
+    if depth >= 1.0 {
+        return vec4<u32>(bitcast<u32>(1.0), 0u, 0u, 0u);
+    }
+    let dx = vec2<i32>(1, 0);
+    let dy = vec2<i32>(0, 1);
+    let slope = vec2<f32>(
+        depth_slope(camera_depth_at(p - dx, size_px), depth, camera_depth_at(p + dx, size_px)),
+        depth_slope(camera_depth_at(p - dy, size_px), depth, camera_depth_at(p + dy, size_px)),
+    );
+    // Move from the pixel's centre to `q` along the surface's plane.
+    // (Kept below 1.0, which would read as background.)
+    let depth_q = clamp(depth + dot(slope, q - (vec2<f32>(p) + 0.5)), 0.0, bitcast<f32>(0x3f7fffffu));
+    let world = unproject(q, depth_q, size);
+    let along_x = unproject(q + vec2<f32>(1.0, 0.0), depth_q + slope.x, size) - world;
+    let along_y = unproject(q + vec2<f32>(0.0, 1.0), depth_q + slope.y, size) - world;
+    var n = cross(along_x, along_y);
+    let to_eye = camera.eye.xyz - world;
+    if dot(n, n) == 0.0 {
+        n = to_eye;
+    }
+    // Towards the viewer: the side of the surface that is seen.
+    n = normalize(select(n, -n, dot(n, to_eye) < 0.0));
+
+    var shadow = 0u;
+    var facing = 0u;
+    let count = min(lights.count, MAX_LIGHTS);
+    for (var i = 0u; i < count; i++) {
+        let light = lights.items[i];
+        if dot(n, to_light(light, world)) > 0.0 {
+            facing |= 1u << i;
+            if in_shadow(light, world) {
+                shadow |= 1u << i;
+            }
+        }
+    }
+    return vec4<u32>(bitcast<u32>(depth_q), shadow, facing, pack_normal(n));
 }

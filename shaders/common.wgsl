@@ -7,9 +7,12 @@
 const MAX_LIGHTS: u32 = 32u;
 struct Camera {
     clip_from_world: mat4x4<f32>,
+    // The inverse (computed in f64 on the CPU), for the analysis pass's
+    // reconstruction of world positions from the camera's depth.
+    world_from_clip: mat4x4<f32>,
     // xyz: eye position in world space.
     eye: vec4<f32>,
-    // x: ambient light level; yzw: unused.
+    // x: ambient light level; yz: analysis resolution; w: unused.
     params: vec4<f32>,
 }
 

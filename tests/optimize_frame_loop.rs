@@ -4,27 +4,56 @@ use glam::DVec3;
 mod common;
 
 use common::setup;
-use lixel::optimize::{AnalysisKind, Optimizer, SampleOptions, ScheduleOptions, ShadowScheduler};
-use lixel::{Light, Parameterization, Samples};
+use lixel::optimize::{Optimizer, SampleOptions, ScheduleOptions, ShadowScheduler};
+use lixel::{Light, Parameterization, Samples, ShadowMapSize};
 
 #[test]
 fn cadence_follows_the_paper() {
-    let scheduler = ShadowScheduler::new(2, ScheduleOptions::default(), Optimizer::new(Default::default())).unwrap();
-    let plans: Vec<Option<AnalysisKind>> = (0..31).map(|f| scheduler.plan(f).analysis).collect();
-    for (frame, plan) in plans.iter().enumerate() {
-        match frame {
-            f if f % 15 == 0 => assert_eq!(*plan, Some(AnalysisKind::Focused), "frame {f}"),
-            f if f % 3 == 0 => assert_eq!(*plan, Some(AnalysisKind::CurrentMatrices), "frame {f}"),
-            f => assert_eq!(*plan, None, "frame {f}"),
+    for lights in [1usize, 2, 4, 5, 7, 32] {
+        let scheduler =
+            ShadowScheduler::new(lights, ScheduleOptions::default(), Optimizer::new(Default::default())).unwrap();
+        let mut turns = vec![0; lights];
+        for frame in 0..60u64 {
+            let plan = scheduler.plan(frame).analysis;
+            // An analysis pass every 3 frames.
+            assert_eq!(plan.is_some(), frame % 3 == 0, "{lights} lights, frame {frame}");
+            let Some(plan) = plan else { continue };
+            let focused: Vec<usize> = (0..lights).filter(|&i| plan.is_focused(i)).collect();
+            assert_eq!(plan.focused.count_ones() as usize, focused.len(), "no bits past the lights");
+            // Staggered: no pass carries more than its share of focused maps.
+            assert!(focused.len() <= lights.div_ceil(5), "{lights} lights, frame {frame}: {focused:?}");
+            for i in focused {
+                turns[i] += 1;
+            }
         }
+        // 20 passes: every light had its focused map once per 5 passes.
+        assert_eq!(turns, vec![4; lights], "{lights} lights");
     }
+    // Light 0 starts, as the paper's first (focused) analysis.
+    let one = ShadowScheduler::new(1, ScheduleOptions::default(), Optimizer::new(Default::default())).unwrap();
+    assert!(one.plan(0).analysis.unwrap().is_focused(0));
+    assert!(!one.plan(3).analysis.unwrap().is_focused(0));
     assert!(ShadowScheduler::new(33, ScheduleOptions::default(), Optimizer::new(Default::default())).is_err());
     assert!(ShadowScheduler::new(
         1,
-        ScheduleOptions { optimize_every: 0, focused_every: 1 },
+        ScheduleOptions { optimize_every: 0, ..Default::default() },
         Optimizer::new(Default::default())
     )
     .is_err());
+}
+
+#[test]
+fn focused_analysis_maps_are_limited_in_size() {
+    let optimizer = || Optimizer::new(Default::default());
+    let scheduler = ShadowScheduler::new(1, ScheduleOptions::default(), optimizer()).unwrap();
+    assert_eq!(scheduler.focused_analysis_size(ShadowMapSize::new(1000, 500)), ShadowMapSize::new(360, 180));
+    assert_eq!(scheduler.focused_analysis_size(ShadowMapSize::new(700, 700)), ShadowMapSize::square(360));
+    assert_eq!(scheduler.focused_analysis_size(ShadowMapSize::square(256)), ShadowMapSize::square(256));
+    // A very thin map keeps at least one texel.
+    assert_eq!(scheduler.focused_analysis_size(ShadowMapSize::new(8000, 1)), ShadowMapSize::new(360, 1));
+    let unlimited =
+        ShadowScheduler::new(1, ScheduleOptions { focused_map_limit: 0, ..Default::default() }, optimizer()).unwrap();
+    assert_eq!(unlimited.focused_analysis_size(ShadowMapSize::square(4096)), ShadowMapSize::square(4096));
 }
 
 #[test]

@@ -29,7 +29,7 @@ pub fn gpu() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo), String> {
     Ok((device, queue, adapter.get_info()))
 }
 
-/// `--preset tiny|small|default` or `--obj path`.
+/// `--preset tiny|small|default|<triangle budget>` or `--obj path`.
 pub fn scene(preset: &str, obj: Option<&str>) -> Result<Scene, String> {
     if let Some(path) = obj {
         return load_obj(path).map_err(|e| e.to_string());
@@ -38,7 +38,10 @@ pub fn scene(preset: &str, obj: Option<&str>) -> Result<Scene, String> {
         "tiny" => ProceduralScene::tiny(),
         "small" => ProceduralScene::small(),
         "default" => ProceduralScene::default(),
-        other => return Err(format!("unknown preset {other:?} (tiny, small, default)")),
+        budget => match budget.parse::<usize>() {
+            Ok(triangle_budget) => ProceduralScene { triangle_budget, ..ProceduralScene::default() },
+            Err(_) => return Err(format!("unknown preset {budget:?} (tiny, small, default or a triangle budget)")),
+        },
     }
     .build())
 }
@@ -237,7 +240,7 @@ pub fn run_loop(
     scene: &Scene,
     config: &LoopConfig,
 ) -> Result<Vec<FrameRecord>, String> {
-    use lixel::optimize::{AnalysisKind, Optimizer, ScheduleOptions, ShadowScheduler};
+    use lixel::optimize::{Optimizer, ScheduleOptions, ShadowScheduler};
     use lixel::render::{AnalysisRequest, Frame};
     use lixel::{Parameterization, ShadowMapSize, ShadowProblem};
     use std::time::Instant;
@@ -262,22 +265,23 @@ pub fn run_loop(
         let t = n as f64 / config.frames_per_loop as f64;
         let camera = walk_camera(t, UVec2::splat(config.size));
         let lights = moving_lights(0.37 * t, config.lights);
-        let problems: Vec<ShadowProblem> = lights
-            .iter()
-            .map(|l| ShadowProblem::new(camera, *l, bounds, ShadowMapSize::square(config.map)))
-            .collect::<Result<_, _>>()
-            .map_err(|e| e.to_string())?;
-        let solve = |p: &Parameterization| -> Result<Vec<lixel::LightMatrix>, String> {
-            problems.iter().map(|problem| problem.solve(p).map_err(|e| e.to_string())).collect()
+        let map = ShadowMapSize::square(config.map);
+        let solve_at = |size: ShadowMapSize, p: &Parameterization| -> Result<Vec<lixel::LightMatrix>, String> {
+            lights
+                .iter()
+                .map(|l| ShadowProblem::new(camera, *l, bounds, size).and_then(|problem| problem.solve(p)))
+                .collect::<Result<_, _>>()
+                .map_err(|e| e.to_string())
         };
+        let solve = |p: &Parameterization| solve_at(map, p);
 
         let solve_start = Instant::now();
-        let (matrices, standard, analysis_kind) = match config.policy {
+        let (matrices, standard, analysis_plan) = match config.policy {
             Policy::Focused => (solve(&Parameterization::Focused)?, None, None),
             Policy::LiSpsm => (solve(&Parameterization::LiSpsm(Default::default()))?, None, None),
             Policy::SceneOptimized => {
-                // The focused matrices are the starting point and the
-                // standard maps of the periodic standard analysis pass.
+                // The focused matrices are the starting point (and the
+                // fallback of a light the optimizer has not reached yet).
                 let focused = solve(&Parameterization::Focused)?;
                 let readback = renderer.try_take_analysis();
                 if let Some(r) = &readback {
@@ -290,25 +294,39 @@ pub fn run_loop(
                     // The optimizer: samples of each light from the readback
                     // (for the camera it was rendered with), optimized against
                     // the light's current matrix; a failure keeps that matrix.
-                    let map = ShadowMapSize::square(config.map);
-                    for (light, l) in lights.iter().enumerate() {
-                        let Ok(samples) = r.samples(*l, bounds, map, light as u32) else { continue };
+                    for (light, samples) in r.samples_all(&lights, bounds, map).into_iter().enumerate() {
+                        let Ok(samples) = samples else { continue };
                         if scheduler.update(light, &samples, n).is_ok() {
                             record.matrices_updated += 1;
                         }
                     }
                 }
-                let current =
+                let current: Vec<_> =
                     focused.iter().enumerate().map(|(i, f)| scheduler.matrix(i).copied().unwrap_or(*f)).collect();
-                (current, Some(focused), scheduler.plan(n).analysis)
+                // The periodic standard analysis: the lights whose turn it is
+                // are looked up in focused maps at the scheduler's reduced
+                // size; the others reuse the frame's maps.
+                let plan = scheduler.plan(n).analysis;
+                let standard = match plan {
+                    Some(plan) if plan.focused != 0 => {
+                        let small = solve_at(scheduler.focused_analysis_size(map), &Parameterization::Focused)?;
+                        Some(
+                            current
+                                .iter()
+                                .zip(small)
+                                .enumerate()
+                                .map(|(i, (&m, f))| if plan.is_focused(i) { f } else { m })
+                                .collect::<Vec<_>>(),
+                        )
+                    }
+                    _ => None,
+                };
+                (current, standard, plan)
             }
         };
         record.solve_ms = solve_start.elapsed().as_secs_f64() * 1e3;
 
-        let analysis = analysis_kind.map(|kind| AnalysisRequest {
-            lights: if kind == AnalysisKind::Focused { standard.as_deref() } else { None },
-            tag: u32::from(kind == AnalysisKind::Focused),
-        });
+        let analysis = analysis_plan.map(|plan| AnalysisRequest { lights: standard.as_deref(), tag: plan.focused });
         let report = renderer
             .render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })
             .map_err(|e| e.to_string())?;

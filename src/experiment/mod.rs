@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, UVec2};
 
 use crate::mesh::{RayCaster, Scene, ShadowMasks};
-use crate::optimize::{OptimizeOptions, Optimizer, Readback, SampleOptions, SearchStrategy};
+use crate::optimize::{OptimizeOptions, Optimizer, SampleOptions, SearchStrategy};
 use crate::render::{AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces};
 use crate::{
     Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, Samples, ShadowMapSize, ShadowProblem,
@@ -629,14 +629,8 @@ pub fn settle(
             }
             renderer.wait_idle()?;
         };
-        let (bits, normals) = readback.optimizer_buffers();
-        let input = Readback {
-            width: readback.masks.width,
-            height: readback.masks.height,
-            depth: &readback.masks.depth,
-            shadow_bits: &bits,
-            normals: Some(&normals),
-        };
+        let bits = readback.optimizer_bits();
+        let input = readback.optimizer_input(&bits);
         let samples = Samples::from_readback(problem, &input, 0, &SampleOptions::default())?;
         let result = optimizer.optimize(&samples, Some(&matrix))?;
         matrix = result.matrix;

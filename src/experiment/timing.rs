@@ -1,15 +1,22 @@
 //! The paper's Table 2: frame time against the number of lights and the map
 //! resolution, for scene-optimized, focused and LiSPSM maps, measured in one
 //! run so that the ratios are comparable.
+//!
+//! The three pipelines are interleaved in blocks of whole optimizer cadences
+//! (15 frames: five analysis passes, one of them with focused maps), the
+//! order rotating from round to round, so that drift in the machine's speed
+//! reaches all three alike. A block is timed from an idle device to an idle
+//! device, so it holds all the GPU work of its frames; within a block at most
+//! one frame is in flight besides the one being built.
 
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
 
 use super::{camera_for, light_for, load_scene, ExperimentConfig, ExperimentError};
-use crate::optimize::{AnalysisKind, Optimizer, Readback, SampleOptions, ScheduleOptions, ShadowScheduler};
+use crate::optimize::{Optimizer, ScheduleOptions, ShadowScheduler};
 use crate::render::{AnalysisRequest, Frame, Renderer};
-use crate::{Camera, LightMatrix, Parameterization, Samples, ShadowMapSize, ShadowProblem};
+use crate::{Camera, Light, LightMatrix, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
 
 /// What to time.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,15 +25,19 @@ pub struct TimingOptions {
     pub lights: Vec<usize>,
     /// Square map sizes.
     pub maps: Vec<u32>,
-    /// Frames timed per cell (after `warmup`).
+    /// Frames timed per pipeline and cell, rounded up to whole blocks.
     pub frames: usize,
-    /// Frames run first and not timed.
-    pub warmup: usize,
+    /// Frames per block: one whole optimizer cadence (`optimize_every x
+    /// focused_every` = 15 by default) so that every block holds the same
+    /// mix of analysis passes.
+    pub block: usize,
+    /// Untimed blocks of each pipeline before the timed rounds of a cell.
+    pub warmup_blocks: usize,
 }
 
 impl Default for TimingOptions {
     fn default() -> Self {
-        Self { lights: vec![1, 2, 3, 4], maps: vec![500, 700, 1000], frames: 30, warmup: 6 }
+        Self { lights: vec![1, 2, 3, 4], maps: vec![500, 700, 1000], frames: 60, block: 15, warmup_blocks: 1 }
     }
 }
 
@@ -44,11 +55,26 @@ pub struct TimingRow {
     /// Mean frame time of the scene-optimized pipeline (analysis every 3
     /// frames, readback consumed when it arrives, optimization per light).
     pub optimized: Duration,
+    /// Per-round ratios optimized / focused (each round times one block of
+    /// each pipeline back to back): median, smallest and largest.
+    pub round_ratios: [f64; 3],
+    /// Timed rounds.
+    pub rounds: usize,
     /// Optimizations run during the timed frames.
     pub optimizations: usize,
+    /// Analysis passes queued during the timed frames.
+    pub analyses: usize,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq)]
+impl TimingRow {
+    /// Mean optimized / focused frame time.
+    #[must_use]
+    pub fn optimized_ratio(&self) -> f64 {
+        self.optimized.as_secs_f64() / self.focused.as_secs_f64()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Pipeline {
     Focused,
     LiSpsm,
@@ -56,8 +82,9 @@ enum Pipeline {
 }
 
 /// A slow walk along the view direction so that matrices change every frame.
-fn walk(base: &Camera, frame: usize) -> Camera {
-    let eye = base.eye() + base.view_direction() * (0.02 * frame as f64) + DVec3::X * (0.01 * frame as f64);
+fn walk(base: &Camera, frame: u64) -> Camera {
+    let t = frame as f64;
+    let eye = base.eye() + base.view_direction() * (0.02 * t) + DVec3::X * (0.01 * t);
     Camera::look_at(
         eye,
         eye + base.view_direction(),
@@ -70,7 +97,124 @@ fn walk(base: &Camera, frame: usize) -> Camera {
     .unwrap_or(*base)
 }
 
-/// Measures the table on `config`'s scene and screen.
+/// One cell's fixed inputs.
+struct Cell<'a> {
+    base: Camera,
+    lights: &'a [Light],
+    bounds: SceneBounds,
+    map: ShadowMapSize,
+}
+
+impl Cell<'_> {
+    fn solve(&self, camera: Camera, map: ShadowMapSize, how: &Parameterization) -> crate::Result<Vec<LightMatrix>> {
+        self.lights.iter().map(|&l| ShadowProblem::new(camera, l, self.bounds, map)?.solve(how)).collect()
+    }
+}
+
+/// One pipeline's state, kept across its blocks.
+struct Run {
+    pipeline: Pipeline,
+    frame: u64,
+    scheduler: ShadowScheduler,
+    optimizations: usize,
+    analyses: usize,
+    timed: Vec<Duration>,
+}
+
+impl Run {
+    fn new(pipeline: Pipeline, lights: usize) -> Result<Self, ExperimentError> {
+        let scheduler = ShadowScheduler::new(lights, ScheduleOptions::default(), Optimizer::new(Default::default()))?;
+        Ok(Self { pipeline, frame: 0, scheduler, optimizations: 0, analyses: 0, timed: Vec::new() })
+    }
+
+    /// Feeds every light the newest readback, if one has arrived (never waits).
+    fn consume_readback(&mut self, renderer: &mut Renderer, cell: &Cell<'_>) -> Result<usize, ExperimentError> {
+        let Some(readback) = renderer.try_take_analysis() else { return Ok(0) };
+        let mut optimized = 0;
+        // The samples belong to the camera the pass was rendered with.
+        for (i, samples) in readback.samples_all(cell.lights, cell.bounds, cell.map).into_iter().enumerate() {
+            if self.scheduler.update(i, &samples?, self.frame).is_ok() {
+                optimized += 1;
+            }
+        }
+        Ok(optimized)
+    }
+
+    /// Renders `frames` frames from an idle device to an idle device and
+    /// returns the wall time.
+    fn block(&mut self, renderer: &mut Renderer, cell: &Cell<'_>, frames: usize) -> Result<Duration, ExperimentError> {
+        renderer.wait_idle()?;
+        let start = Instant::now();
+        let mut previous = None;
+        let (mut optimizations, mut analyses) = (0, 0);
+        for _ in 0..frames {
+            let camera = walk(&cell.base, self.frame);
+            let mut analysis_lights = Vec::new();
+            let mut analysis = false;
+            let matrices = match self.pipeline {
+                Pipeline::Focused => cell.solve(camera, cell.map, &Parameterization::Focused)?,
+                Pipeline::LiSpsm => cell.solve(camera, cell.map, &Parameterization::LiSpsm(Default::default()))?,
+                Pipeline::Optimized => {
+                    optimizations += self.consume_readback(renderer, cell)?;
+                    let mut matrices = Vec::with_capacity(cell.lights.len());
+                    for i in 0..cell.lights.len() {
+                        matrices.push(match self.scheduler.matrix(i) {
+                            Some(m) => *m,
+                            None => ShadowProblem::new(camera, cell.lights[i], cell.bounds, cell.map)?
+                                .solve(&Parameterization::Focused)?,
+                        });
+                    }
+                    if let Some(plan) = self.scheduler.plan(self.frame).analysis {
+                        analysis = true;
+                        if plan.focused != 0 {
+                            // Focused maps for the lights whose turn it is; the
+                            // rest reuse the frame's maps.
+                            let size = self.scheduler.focused_analysis_size(cell.map);
+                            for (i, &light) in cell.lights.iter().enumerate() {
+                                analysis_lights.push(if plan.is_focused(i) {
+                                    ShadowProblem::new(camera, light, cell.bounds, size)?
+                                        .solve(&Parameterization::Focused)?
+                                } else {
+                                    matrices[i]
+                                });
+                            }
+                        }
+                    }
+                    matrices
+                }
+            };
+            let request = analysis.then(|| AnalysisRequest {
+                lights: (!analysis_lights.is_empty()).then_some(&analysis_lights[..]),
+                tag: 0,
+            });
+            let report =
+                renderer.render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis: request })?;
+            analyses += usize::from(report.analysis_queued);
+            // At most one frame in flight besides the next one being built.
+            if let Some(prev) = previous.replace(report.submission) {
+                renderer.wait_for(&prev)?;
+            }
+            self.frame += 1;
+        }
+        renderer.wait_idle()?;
+        let elapsed = start.elapsed();
+        self.optimizations += optimizations;
+        self.analyses += analyses;
+        Ok(elapsed)
+    }
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    match values.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => values[n / 2],
+        n => 0.5 * (values[n / 2 - 1] + values[n / 2]),
+    }
+}
+
+/// Measures the table on `config`'s scene and screen; `progress` sees each
+/// cell as it finishes.
 ///
 /// # Errors
 /// Scene, renderer and solver failures.
@@ -79,100 +223,56 @@ pub fn run_timing(
     options: &TimingOptions,
     device: &wgpu::Device,
     queue: &wgpu::Queue,
+    mut progress: impl FnMut(&TimingRow),
 ) -> Result<Vec<TimingRow>, ExperimentError> {
     let scene = load_scene(&config.scene)?;
     let base = camera_for(config, &scene)?;
     let mut renderer = Renderer::new(device, queue, &scene, super::experiment_renderer_options())?;
-    let bounds = scene.bounds();
+    let block = options.block.max(1);
+    let rounds = options.frames.div_ceil(block).max(1);
     let mut rows = Vec::new();
     for &map in &options.maps {
         for &count in &options.lights {
-            let lights: Vec<_> = (0..count).map(|i| light_for(config, &scene, i)).collect();
-            let mut time = |pipeline| -> Result<(Duration, usize), ExperimentError> {
-                let mut scheduler =
-                    ShadowScheduler::new(count, ScheduleOptions::default(), Optimizer::new(Default::default()))?;
-                let mut optimizations = 0;
-                let mut previous = None;
-                let mut timed = Duration::ZERO;
-                for frame in 0..options.warmup + options.frames {
-                    let start = Instant::now();
-                    let camera = walk(&base, frame);
-                    let problems: Vec<ShadowProblem> = lights
-                        .iter()
-                        .map(|&l| ShadowProblem::new(camera, l, bounds, ShadowMapSize::square(map)))
-                        .collect::<Result<_, _>>()?;
-                    let solve = |p: &ShadowProblem, param: &Parameterization| p.solve(param);
-                    let matrices: Vec<LightMatrix> = match pipeline {
-                        Pipeline::Focused => {
-                            problems.iter().map(|p| solve(p, &Parameterization::Focused)).collect::<Result<_, _>>()?
-                        }
-                        Pipeline::LiSpsm => problems
-                            .iter()
-                            .map(|p| solve(p, &Parameterization::LiSpsm(Default::default())))
-                            .collect::<Result<_, _>>()?,
-                        Pipeline::Optimized => {
-                            // Consume a readback if one has arrived (never wait).
-                            if let Some(readback) = renderer.try_take_analysis() {
-                                let (bits, normals) = readback.optimizer_buffers();
-                                let masks = &readback.masks;
-                                let input = Readback {
-                                    width: masks.width,
-                                    height: masks.height,
-                                    depth: &masks.depth,
-                                    shadow_bits: &bits,
-                                    normals: Some(&normals),
-                                };
-                                for (i, p) in problems.iter().enumerate() {
-                                    let samples =
-                                        Samples::from_readback(p, &input, i as u32, &SampleOptions::default())?;
-                                    if scheduler.update(i, &samples, frame as u64).is_ok() {
-                                        optimizations += usize::from(frame >= options.warmup);
-                                    }
-                                }
-                            }
-                            problems
-                                .iter()
-                                .enumerate()
-                                .map(|(i, p)| match scheduler.matrix(i) {
-                                    Some(m) => Ok(*m),
-                                    None => solve(p, &Parameterization::Focused),
-                                })
-                                .collect::<Result<_, _>>()?
-                        }
-                    };
-                    let focused: Vec<LightMatrix>;
-                    let analysis = match (pipeline, scheduler.plan(frame as u64).analysis) {
-                        (Pipeline::Optimized, Some(kind)) => {
-                            focused = if kind == AnalysisKind::Focused {
-                                problems
-                                    .iter()
-                                    .map(|p| solve(p, &Parameterization::Focused))
-                                    .collect::<Result<_, _>>()?
-                            } else {
-                                Vec::new()
-                            };
-                            Some(AnalysisRequest { lights: (!focused.is_empty()).then_some(&focused[..]), tag: 0 })
-                        }
-                        _ => None,
-                    };
-                    let report =
-                        renderer.render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })?;
-                    // At most one frame in flight: wait for the previous one.
-                    if let Some(prev) = previous.replace(report.submission) {
-                        renderer.wait_for(&prev)?;
-                    }
-                    if frame >= options.warmup {
-                        timed += start.elapsed();
-                    }
+            let lights: Vec<Light> = (0..count).map(|i| light_for(config, &scene, i)).collect();
+            let cell = Cell { base, lights: &lights, bounds: scene.bounds(), map: ShadowMapSize::square(map) };
+            let mut runs = [Pipeline::Focused, Pipeline::LiSpsm, Pipeline::Optimized]
+                .map(|p| Run::new(p, count))
+                .into_iter()
+                .collect::<Result<Vec<_>, _>>()?;
+            for run in &mut runs {
+                for _ in 0..options.warmup_blocks {
+                    run.block(&mut renderer, &cell, block)?;
                 }
-                renderer.wait_idle()?;
-                while renderer.try_take_analysis().is_some() {}
-                Ok((timed / options.frames.max(1) as u32, optimizations))
+                run.optimizations = 0;
+                run.analyses = 0;
+            }
+            for round in 0..rounds {
+                for k in 0..runs.len() {
+                    let run = &mut runs[(round + k) % 3];
+                    let elapsed = run.block(&mut renderer, &cell, block)?;
+                    run.timed.push(elapsed);
+                }
+            }
+            let mean = |run: &Run| run.timed.iter().sum::<Duration>() / (rounds * block) as u32;
+            let mut ratios: Vec<f64> =
+                runs[2].timed.iter().zip(&runs[0].timed).map(|(o, f)| o.as_secs_f64() / f.as_secs_f64()).collect();
+            let (lowest, highest) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+            let row = TimingRow {
+                lights: count,
+                map,
+                focused: mean(&runs[0]),
+                lispsm: mean(&runs[1]),
+                optimized: mean(&runs[2]),
+                round_ratios: [median(&mut ratios), lowest, highest],
+                rounds,
+                optimizations: runs[2].optimizations,
+                analyses: runs[2].analyses,
             };
-            let (focused, _) = time(Pipeline::Focused)?;
-            let (lispsm, _) = time(Pipeline::LiSpsm)?;
-            let (optimized, optimizations) = time(Pipeline::Optimized)?;
-            rows.push(TimingRow { lights: count, map, focused, lispsm, optimized, optimizations });
+            progress(&row);
+            rows.push(row);
+            // Readbacks left in the ring belong to this cell.
+            renderer.wait_idle()?;
+            while renderer.try_take_analysis().is_some() {}
         }
     }
     Ok(rows)
@@ -182,20 +282,31 @@ pub fn run_timing(
 #[must_use]
 pub fn timing_markdown(rows: &[TimingRow]) -> String {
     let mut md = String::from(
-        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | LiSPSM / focused | optimized / focused | optimizations |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | LiSPSM / focused | optimized / focused | per round: median (min–max) | analyses | optimizations |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n",
     );
     for r in rows {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        let [median, lowest, highest] = r.round_ratios;
         md.push_str(&format!(
-            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {} |\n",
+            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {median:.3} ({lowest:.3}–{highest:.3}) | {} | {} |\n",
             r.lights,
             r.map,
             ms(r.focused),
             ms(r.lispsm),
             ms(r.optimized),
             ms(r.lispsm) / ms(r.focused),
-            ms(r.optimized) / ms(r.focused),
+            r.optimized_ratio(),
+            r.analyses,
             r.optimizations
+        ));
+    }
+    if !rows.is_empty() {
+        let mut overall: Vec<f64> = rows.iter().map(TimingRow::optimized_ratio).collect();
+        let largest = overall.iter().copied().fold(0.0f64, f64::max);
+        md.push_str(&format!(
+            "\nScene-optimized / focused over all cells: median {:.3}, largest {largest:.3}.\n",
+            median(&mut overall)
         ));
     }
     md

@@ -28,7 +28,7 @@ pub use objective::{
     SampleGradient,
 };
 pub use samples::{Readback, SampleCounts, SampleOptions, Samples};
-pub use schedule::{AnalysisKind, FramePlan, ScheduleOptions, ShadowScheduler};
+pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
 
 /// The paper's rotation angles, in degrees (one negative for exploration).
 pub const PAPER_ANGLES_DEGREES: [f64; 9] = [-10.0, 3.0, 5.0, 9.0, 16.0, 23.0, 30.0, 40.0, 50.0];

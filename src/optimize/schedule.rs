@@ -4,38 +4,59 @@
 use crate::error::{LixelError, Result};
 use crate::matrix::LightMatrix;
 use crate::optimize::{OptimizeReport, Optimizer, Samples};
+use crate::scene::ShadowMapSize;
 
-/// Which matrices an analysis pass should render its shadow bits with.
+/// Which maps an analysis pass looks each light's shadows up in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AnalysisKind {
-    /// The matrices currently in use (the usual case).
-    CurrentMatrices,
-    /// Plain focused matrices, so that shadow components outside the current
-    /// (optimized, tighter) maps are not missed.
-    Focused,
+pub struct AnalysisPlan {
+    /// Bit `i`: look light `i` up in a plain focused map (built at
+    /// [`ShadowScheduler::focused_analysis_size`]), so that shadow components
+    /// outside its current, tighter map are not missed. Other lights use the
+    /// maps the frame renders anyway.
+    pub focused: u32,
+}
+
+impl AnalysisPlan {
+    /// Whether light `light` is looked up in a plain focused map.
+    #[must_use]
+    pub fn is_focused(&self, light: usize) -> bool {
+        light < 32 && self.focused >> light & 1 == 1
+    }
 }
 
 /// What the caller should do this frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FramePlan {
     /// Render a low-resolution analysis pass and start its readback.
-    pub analysis: Option<AnalysisKind>,
+    pub analysis: Option<AnalysisPlan>,
 }
 
 /// Cadence of [`ShadowScheduler`].
+///
+/// With `n` lights, analysis pass `p` (frame `p * optimize_every`) looks
+/// light `i` up in a focused map when `p % focused_every == i * focused_every / n`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScheduleOptions {
     /// Request an analysis pass (and so an optimization) every this many
     /// frames. The paper: 3.
     pub optimize_every: u32,
-    /// Every this many analysis passes, render one with plain focused maps.
-    /// Default 5 (every 15 frames with `optimize_every = 3`).
+    /// Every this many analysis passes, each light is looked up once in a
+    /// plain focused map. Default 5 (every 15 frames with
+    /// `optimize_every = 3`). The lights take turns (staggered evenly over
+    /// the passes), so no frame renders every light's extra map at once.
     pub focused_every: u32,
+    /// Largest side of the focused maps an analysis pass looks lights up in
+    /// ([`ShadowScheduler::focused_analysis_size`]). Their bits are
+    /// only looked at the analysis resolution, and they are there to find
+    /// shadows outside the current maps, not to place boundaries to the
+    /// texel, so they need not be as large as the maps shown. Default 360,
+    /// twice the default 180x180 analysis; 0 for no limit.
+    pub focused_map_limit: u32,
 }
 
 impl Default for ScheduleOptions {
     fn default() -> Self {
-        Self { optimize_every: 3, focused_every: 5 }
+        Self { optimize_every: 3, focused_every: 5, focused_map_limit: 360 }
     }
 }
 
@@ -51,7 +72,8 @@ struct LightState {
 ///
 /// ```text
 /// each frame:    plan = scheduler.plan(frame)
-///                if plan.analysis: render the analysis pass, start its readback
+///                if plan.analysis: render the analysis pass (light i looked up in a
+///                                  focused map where plan.is_focused(i)), start its readback
 /// when a readback arrives (frames later):
 ///                for each light: scheduler.update(light, &samples, frame)
 /// render with:   scheduler.matrix(light) (falls back to your focused matrix while None)
@@ -82,21 +104,35 @@ impl ShadowScheduler {
     }
 
     /// What to render in frame `frame`: an analysis pass every
-    /// `optimize_every` frames, every `focused_every`-th of them with plain
-    /// focused maps. Frame 0 always analyses with focused maps (no matrix yet).
+    /// `optimize_every` frames; in every `focused_every` consecutive passes
+    /// each light is looked up once in a plain focused map, the lights
+    /// spread evenly over the passes (see [`ScheduleOptions`]).
     #[must_use]
     pub fn plan(&self, frame: u64) -> FramePlan {
         let every = u64::from(self.options.optimize_every);
         if frame % every != 0 {
             return FramePlan { analysis: None };
         }
-        let pass = frame / every;
-        let kind = if pass % u64::from(self.options.focused_every) == 0 {
-            AnalysisKind::Focused
-        } else {
-            AnalysisKind::CurrentMatrices
-        };
-        FramePlan { analysis: Some(kind) }
+        let turns = u64::from(self.options.focused_every);
+        let turn = (frame / every) % turns;
+        let n = self.lights.len() as u64;
+        let focused = (0..n).filter(|&i| i * turns / n == turn).fold(0u32, |bits, i| bits | 1 << i);
+        FramePlan { analysis: Some(AnalysisPlan { focused }) }
+    }
+
+    /// The size to build the focused map of a light looked up in one
+    /// ([`AnalysisPlan::is_focused`]) when it is shown with `map`: `map` scaled down (aspect kept) so that its
+    /// larger side is at most [`ScheduleOptions::focused_map_limit`].
+    #[must_use]
+    pub fn focused_analysis_size(&self, map: ShadowMapSize) -> ShadowMapSize {
+        let limit = self.options.focused_map_limit;
+        let larger = map.width.max(map.height);
+        if limit == 0 || larger <= limit {
+            return map;
+        }
+        let scale =
+            |side: u32| ((u64::from(side) * u64::from(limit) + u64::from(larger) / 2) / u64::from(larger)).max(1);
+        ShadowMapSize { width: scale(map.width) as u32, height: scale(map.height) as u32 }
     }
 
     /// The matrix to render light `light` with, once one has been computed.

@@ -42,9 +42,9 @@ pub struct AnalysisReadback {
     pub tag: u32,
     /// Depth, shadow and facing bits at the analysis resolution.
     pub masks: ShadowMasks,
-    /// Octahedral-encoded normals (two snorm16), one per pixel; see
-    /// [`normal`](Self::normal).
-    pub packed_normals: Vec<u32>,
+    /// Unit surface normals, one per pixel, row by row (zero for
+    /// background); decoded once from the pass's 2x16-bit octahedral words.
+    pub normals: Vec<[f32; 3]>,
 }
 
 impl AnalysisReadback {
@@ -59,42 +59,51 @@ impl AnalysisReadback {
             shadow: Vec::with_capacity(w * h),
             facing: Vec::with_capacity(w * h),
         };
-        let mut packed_normals = Vec::with_capacity(w * h);
+        let mut normals = Vec::with_capacity(w * h);
         for y in 0..h {
             let words: &[u32] = bytemuck::cast_slice(&bytes[y * row..y * row + w * MASK_TEXEL_BYTES as usize]);
             for texel in words.chunks_exact(4) {
-                masks.depth.push(f32::from_bits(texel[0]));
+                let depth = f32::from_bits(texel[0]);
+                masks.depth.push(depth);
                 masks.shadow.push(texel[1]);
                 masks.facing.push(texel[2]);
-                packed_normals.push(texel[3]);
+                let visible = depth < 1.0;
+                normals.push(if visible { unpack_normal(texel[3]).to_array() } else { [0.0; 3] });
             }
         }
-        Self { frame, latency, camera: meta.camera, lights: meta.lights, tag: meta.tag, masks, packed_normals }
+        Self { frame, latency, camera: meta.camera, lights: meta.lights, tag: meta.tag, masks, normals }
     }
 
-    /// The buffers [`Samples::from_readback`](crate::Samples::from_readback)
-    /// wants: per pixel, bit `i` set when light `i` does not light it
-    /// (shadowed, or facing away, as a shadow-map test finds it), and the
-    /// unpacked normals.
+    /// What [`Samples::from_readback`](crate::Samples::from_readback) takes
+    /// as shadow bits: per pixel, bit `i` set when light `i` does not light
+    /// it (shadowed, or facing away, as a shadow-map test finds it).
     #[must_use]
-    pub fn optimizer_buffers(&self) -> (Vec<u32>, Vec<[f32; 3]>) {
+    pub fn optimizer_bits(&self) -> Vec<u32> {
         let masks = &self.masks;
-        let bits = masks
+        masks
             .shadow
             .iter()
             .zip(&masks.facing)
             .enumerate()
             .map(|(i, (&s, &f))| if masks.visible(i) { s | !f } else { 0 })
-            .collect();
-        let normals = (0..masks.height)
-            .flat_map(|y| (0..masks.width).map(move |x| (x, y)))
-            .map(|(x, y)| self.normal(x, y).to_array())
-            .collect();
-        (bits, normals)
+            .collect()
+    }
+
+    /// The optimizer's input, with `bits` from [`optimizer_bits`](Self::optimizer_bits).
+    #[must_use]
+    pub fn optimizer_input<'a>(&'a self, bits: &'a [u32]) -> crate::optimize::Readback<'a> {
+        crate::optimize::Readback {
+            width: self.masks.width,
+            height: self.masks.height,
+            depth: &self.masks.depth,
+            shadow_bits: bits,
+            normals: Some(&self.normals),
+        }
     }
 
     /// The optimizer's samples of light `index` (`light` itself, scene
     /// `bounds`, map size `map`), for the camera this pass was rendered with.
+    /// For several lights, [`samples_all`](Self::samples_all) shares the work.
     ///
     /// # Errors
     /// Whatever [`ShadowProblem::new`](crate::ShadowProblem::new) or
@@ -106,26 +115,41 @@ impl AnalysisReadback {
         map: crate::ShadowMapSize,
         index: u32,
     ) -> crate::Result<crate::Samples> {
-        let problem = crate::ShadowProblem::new(self.camera, light, bounds, map)?;
-        let (bits, normals) = self.optimizer_buffers();
-        let input = crate::optimize::Readback {
-            width: self.masks.width,
-            height: self.masks.height,
-            depth: &self.masks.depth,
-            shadow_bits: &bits,
-            normals: Some(&normals),
-        };
-        crate::Samples::from_readback(&problem, &input, index, &crate::optimize::SampleOptions::default())
+        let bits = self.optimizer_bits();
+        Self::samples_from(&self.optimizer_input(&bits), self.camera, light, bounds, map, index)
+    }
+
+    /// The samples of every light: `lights[i]` is bit `i` of the pass.
+    #[must_use]
+    pub fn samples_all(
+        &self,
+        lights: &[crate::Light],
+        bounds: crate::SceneBounds,
+        map: crate::ShadowMapSize,
+    ) -> Vec<crate::Result<crate::Samples>> {
+        let bits = self.optimizer_bits();
+        let input = self.optimizer_input(&bits);
+        (0..lights.len().min(32))
+            .map(|i| Self::samples_from(&input, self.camera, lights[i], bounds, map, i as u32))
+            .collect()
+    }
+
+    fn samples_from(
+        input: &crate::optimize::Readback<'_>,
+        camera: Camera,
+        light: crate::Light,
+        bounds: crate::SceneBounds,
+        map: crate::ShadowMapSize,
+        index: u32,
+    ) -> crate::Result<crate::Samples> {
+        let problem = crate::ShadowProblem::new(camera, light, bounds, map)?;
+        crate::Samples::from_readback(&problem, input, index, &crate::optimize::SampleOptions::default())
     }
 
     /// The unit surface normal at pixel `(x, y)` (zero for background).
     #[must_use]
     pub fn normal(&self, x: u32, y: u32) -> Vec3 {
-        let i = (y * self.masks.width + x) as usize;
-        if !self.masks.visible(i) {
-            return Vec3::ZERO;
-        }
-        unpack_normal(self.packed_normals[i])
+        Vec3::from_array(self.normals[(y * self.masks.width + x) as usize])
     }
 
     /// Full-resolution screen coordinates `(x1, x2, x3)` of the centre of

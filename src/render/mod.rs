@@ -19,9 +19,12 @@
 //!    view at low resolution (180x180 by default) writing only the masks,
 //!    optionally looked up in a different set of maps (the periodic focused
 //!    analysis of the paper's section 2.4), copied into a [`ReadbackRing`]
-//!    slot. [`Renderer::try_take_analysis`] hands it back frames later
-//!    without ever waiting; when every slot is in flight the frame skips its
-//!    analysis instead of stalling.
+//!    slot. By default ([`AnalysisSource::CameraDepth`]) it is a full-screen
+//!    pass over the camera pass's depth buffer, so the scene is drawn only
+//!    once per frame; [`AnalysisSource::Geometry`] draws it again.
+//!    [`Renderer::try_take_analysis`] hands it back frames later without
+//!    ever waiting; when every slot is in flight the frame skips its analysis
+//!    instead of stalling.
 //!
 //! GPU timestamps of the three stages come back the same way
 //! ([`Renderer::try_take_gpu_times`]) when the device has `TIMESTAMP_QUERY`.
@@ -199,11 +202,33 @@ fn facing_winding(m: &glam::DMat4, p: glam::DVec3, towards: glam::DVec3) -> f64 
     (b - a).perp_dot(c - a)
 }
 
+/// Where the analysis pass gets the visible surface from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AnalysisSource {
+    /// A full-screen pass over the camera pass's depth buffer (no second
+    /// geometry pass; its cost does not grow with the scene). Each analysis
+    /// pixel stands for the full-resolution point at its scaled centre: the
+    /// surface there is extrapolated from the nearest full-resolution pixel
+    /// along the one-sided depth differences that continue its surface
+    /// (exact on planes, where screen-space depth is affine), the normal is
+    /// the cross product of the same differences (a face normal, turned
+    /// towards the viewer), and the world position is reconstructed from the
+    /// 32-bit depth.
+    #[default]
+    CameraDepth,
+    /// Draws the scene again at the analysis resolution, with interpolated
+    /// positions and vertex normals. Exact, but on a software rasterizer it
+    /// costs a good part of a camera pass.
+    Geometry,
+}
+
 /// Settings fixed when the renderer is created.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RendererOptions {
     /// Resolution of the analysis pass (the paper: 180x180 for 1150² screens).
     pub analysis_size: (u32, u32),
+    /// Where the analysis pass gets the visible surface from.
+    pub analysis_source: AnalysisSource,
     /// Staging buffers of the analysis readback ring (the paper used 2).
     pub readback_slots: usize,
     /// Shadow-map depth bias.
@@ -222,6 +247,7 @@ impl Default for RendererOptions {
     fn default() -> Self {
         Self {
             analysis_size: (180, 180),
+            analysis_source: AnalysisSource::CameraDepth,
             readback_slots: 3,
             bias: ShadowBias::default(),
             shadow_faces: ShadowFaces::Both,
@@ -238,6 +264,8 @@ pub struct AnalysisRequest<'a> {
     /// Maps to look shadows up in; `None`: the frame's own. The paper
     /// periodically uses standard (focused) maps here so that shadows that
     /// moved into view are not missed by maps optimized for the old view.
+    /// A matrix equal to the frame's light of the same index reuses that
+    /// light's map; only the others cost a shadow pass.
     pub lights: Option<&'a [LightMatrix]>,
     /// A number handed back with the readback (e.g. which maps were used).
     pub tag: u32,
@@ -270,6 +298,9 @@ pub struct FrameReport {
     pub analysis_queued: bool,
     /// Lights that needed unclipped depth the device could not provide.
     pub unclipped_unavailable: u32,
+    /// Shadow passes rendered: one per light, plus one per analysis matrix
+    /// that differs from the frame's light of the same index.
+    pub shadow_passes: u32,
     /// CPU time spent encoding and submitting.
     pub cpu_time: std::time::Duration,
 }
@@ -304,7 +335,8 @@ pub struct Renderer {
     shadow_maps: ShadowMaps,
     camera_targets: Option<CameraTargets>,
     analysis_masks: Target,
-    analysis_depth: Target,
+    /// Depth buffer of [`AnalysisSource::Geometry`].
+    analysis_depth: Option<Target>,
     ring: ReadbackRing<AnalysisMeta>,
     timer: Option<GpuTimer>,
     frame: u64,
@@ -415,7 +447,8 @@ impl Renderer {
             shadow_maps: ShadowMaps::new(device, 1, 1, 1),
             camera_targets: None,
             analysis_masks: Target::new(device, "lixel analysis masks", MASKS_FORMAT, aw, ah),
-            analysis_depth: Target::new(device, "lixel analysis depth", passes::DEPTH_FORMAT, aw, ah),
+            analysis_depth: (options.analysis_source == AnalysisSource::Geometry)
+                .then(|| Target::new(device, "lixel analysis depth", passes::DEPTH_FORMAT, aw, ah)),
             ring,
             timer,
             frame: 0,
@@ -476,38 +509,43 @@ impl Renderer {
         let viewport = frame.camera.viewport();
         check_target(viewport.x, viewport.y, self.max_texture)?;
 
-        // Shadow-map slots: the frame's lights, then the analysis pass's own.
+        // Shadow-map slots: the frame's lights, then the analysis pass's own
+        // where they differ from the frame's light of the same index.
         let mut slots: Vec<&LightMatrix> = frame.lights.iter().collect();
-        slots.extend(analysis_lights.into_iter().flatten());
+        let mut analysis_layers = Vec::new();
+        for (i, m) in analysis_lights.into_iter().flatten().enumerate() {
+            if frame.lights.get(i) == Some(m) {
+                analysis_layers.push(i as u32);
+            } else {
+                analysis_layers.push(slots.len() as u32);
+                slots.push(m);
+            }
+        }
         debug_assert!(slots.len() <= MAX_SHADOW_SLOTS);
         self.ensure_resources(&slots, viewport.x, viewport.y);
 
         // Uniforms. Light intensity is split so that n lights add up to 1.
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
-        let raw_lights = |lights: &[LightMatrix], first_layer: u32| -> Vec<LightRaw> {
+        let raw_lights = |lights: &[LightMatrix], layer: &dyn Fn(usize) -> u32| -> Vec<LightRaw> {
             let color = light_color(lights.len());
-            lights.iter().enumerate().map(|(i, m)| LightRaw::to_raw(m, first_layer + i as u32, color)).collect()
+            lights.iter().enumerate().map(|(i, m)| LightRaw::to_raw(m, layer(i), color)).collect()
         };
         self.queue.write_buffer(
             &self.camera_uniforms,
             0,
-            bytemuck::bytes_of(&CameraRaw::to_raw(frame.camera, self.options.ambient)),
+            bytemuck::bytes_of(&CameraRaw::to_raw(frame.camera, self.options.ambient, self.options.analysis_size)),
         );
         self.queue.write_buffer(
             &self.camera_bindings.lights,
             0,
-            bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(frame.lights, 0))),
+            bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(frame.lights, &|i| i as u32))),
         );
         if frame.analysis.is_some() {
-            let (lights, first) = match analysis_lights {
-                Some(lights) => (lights, frame.lights.len() as u32),
-                None => (frame.lights, 0),
+            let raw = match analysis_lights {
+                Some(lights) => raw_lights(lights, &|i| analysis_layers[i]),
+                None => raw_lights(frame.lights, &|i| i as u32),
             };
-            self.queue.write_buffer(
-                &self.analysis_bindings.lights,
-                0,
-                bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(lights, first))),
-            );
+            self.queue.write_buffer(&self.analysis_bindings.lights, 0, bytemuck::bytes_of(&LightsRaw::to_raw(&raw)));
         }
         let shadow_raw: Vec<ShadowPassRaw> =
             slots.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
@@ -555,6 +593,7 @@ impl Renderer {
             analysis_skipped,
             analysis_queued: analysis_slot.is_some(),
             unclipped_unavailable,
+            shadow_passes: slots.len() as u32,
             cpu_time: started.elapsed(),
         };
         self.frame += 1;
@@ -631,23 +670,36 @@ impl Renderer {
         }
         if self.camera_targets.as_ref().is_none_or(|t| t.width != width || t.height != height) {
             self.camera_targets = Some(CameraTargets::new(&self.device, "lixel camera", width, height));
+            // It binds the camera depth.
+            self.analysis_bindings.bind_group = None;
         }
-        for (bindings, label) in [
-            (&mut self.camera_bindings, "lixel camera bind group"),
-            (&mut self.analysis_bindings, "lixel analysis bind group"),
+        let camera_depth = &self.camera_targets.as_ref().expect("created above").depth.view;
+        for (bindings, layout, depth, label) in [
+            (&mut self.camera_bindings, &self.passes.camera_layout, None, "lixel camera bind group"),
+            (
+                &mut self.analysis_bindings,
+                &self.passes.analysis_layout,
+                Some(camera_depth),
+                "lixel analysis bind group",
+            ),
         ] {
             if bindings.bind_group.is_none() {
+                let mut entries = vec![
+                    wgpu::BindGroupEntry { binding: 0, resource: self.camera_uniforms.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: bindings.lights.as_entire_binding() },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&self.shadow_maps.array_view),
+                    },
+                ];
+                if let Some(depth) = depth {
+                    entries
+                        .push(wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(depth) });
+                }
                 bindings.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some(label),
-                    layout: &self.passes.layout,
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: self.camera_uniforms.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 1, resource: bindings.lights.as_entire_binding() },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(&self.shadow_maps.array_view),
-                        },
-                    ],
+                    layout,
+                    entries: &entries,
                 }));
             }
         }
@@ -758,16 +810,24 @@ impl Renderer {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("lixel analysis pass"),
                 color_attachments: &[Some(masks_attachment(&self.analysis_masks.view))],
-                depth_stencil_attachment: Some(depth_attachment(&self.analysis_depth.view)),
+                depth_stencil_attachment: self.analysis_depth.as_ref().map(|t| depth_attachment(&t.view)),
                 timestamp_writes,
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.passes.analysis);
             pass.set_bind_group(0, self.analysis_bindings.bind_group.as_ref(), &[]);
-            pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
-            pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+            match self.options.analysis_source {
+                AnalysisSource::CameraDepth => {
+                    pass.set_pipeline(&self.passes.analysis_depth);
+                    pass.draw(0..3, 0..1);
+                }
+                AnalysisSource::Geometry => {
+                    pass.set_pipeline(&self.passes.analysis_geometry);
+                    pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+                    pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+                }
+            }
         }
         let (w, h) = self.options.analysis_size;
         encoder.copy_texture_to_buffer(

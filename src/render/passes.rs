@@ -151,13 +151,16 @@ impl ShadowPass {
     }
 }
 
-/// The camera and analysis passes: same vertex stage and bindings,
-/// different fragment outputs.
+/// The camera and analysis passes: the camera pass and the geometry
+/// analysis share the vertex stage; the depth analysis draws one full-screen
+/// triangle. The analysis layout adds the camera pass's depth (binding 3).
 pub(crate) struct ScenePasses {
-    pub(crate) layout: wgpu::BindGroupLayout,
+    pub(crate) camera_layout: wgpu::BindGroupLayout,
+    pub(crate) analysis_layout: wgpu::BindGroupLayout,
     pub(crate) color: wgpu::RenderPipeline,
     pub(crate) color_masks: wgpu::RenderPipeline,
-    pub(crate) analysis: wgpu::RenderPipeline,
+    pub(crate) analysis_geometry: wgpu::RenderPipeline,
+    pub(crate) analysis_depth: wgpu::RenderPipeline,
 }
 
 impl ScenePasses {
@@ -185,71 +188,122 @@ impl ScenePasses {
             },
             count: None,
         };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lixel scene bind group layout"),
+        let depth_texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let scene_entries = [uniform(0), uniform(1), depth_texture(2, wgpu::TextureViewDimension::D2Array)];
+        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lixel camera bind group layout"),
+            entries: &scene_entries,
+        });
+        let analysis_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lixel analysis bind group layout"),
             entries: &[
-                uniform(0),
-                uniform(1),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                scene_entries[0],
+                scene_entries[1],
+                scene_entries[2],
+                depth_texture(3, wgpu::TextureViewDimension::D2),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("lixel scene pipeline layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
+        let pipeline_layout = |label, layout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            })
+        };
+        let camera_pipeline_layout = pipeline_layout("lixel camera pipeline layout", &camera_layout);
+        let analysis_pipeline_layout = pipeline_layout("lixel analysis pipeline layout", &analysis_layout);
+        let depth_test = Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
         });
-        let pipeline =
-            |label: &str, module: &wgpu::ShaderModule, entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(VertexRaw::layout())],
-                    },
-                    // No culling, as in the shadow pass and the ray caster.
-                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: wgpu::StencilState::default(),
-                        bias: wgpu::DepthBiasState::default(),
-                    }),
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            };
+        let scene_pipeline = |label: &str,
+                              layout: &wgpu::PipelineLayout,
+                              module: &wgpu::ShaderModule,
+                              entry: &str,
+                              targets: &[Option<wgpu::ColorTargetState>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VertexRaw::layout())],
+                },
+                // No culling, as in the shadow pass and the ray caster.
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: depth_test.clone(),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
         let color_target = Some(wgpu::ColorTargetState::from(COLOR_FORMAT));
         let masks_target = Some(wgpu::ColorTargetState::from(MASKS_FORMAT));
+        let analysis_depth = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lixel analysis pipeline (camera depth)"),
+            layout: Some(&analysis_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &analysis_module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &analysis_module,
+                entry_point: Some("fs_analysis_depth"),
+                compilation_options: Default::default(),
+                targets: std::slice::from_ref(&masks_target),
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         Self {
-            color: pipeline("lixel camera pipeline", &camera_module, "fs_color", std::slice::from_ref(&color_target)),
-            color_masks: pipeline(
+            color: scene_pipeline(
+                "lixel camera pipeline",
+                &camera_pipeline_layout,
+                &camera_module,
+                "fs_color",
+                std::slice::from_ref(&color_target),
+            ),
+            color_masks: scene_pipeline(
                 "lixel camera pipeline with masks",
+                &camera_pipeline_layout,
                 &camera_module,
                 "fs_color_masks",
                 &[color_target, masks_target.clone()],
             ),
-            analysis: pipeline("lixel analysis pipeline", &analysis_module, "fs_analysis", &[masks_target]),
-            layout,
+            analysis_geometry: scene_pipeline(
+                "lixel analysis pipeline (geometry)",
+                &analysis_pipeline_layout,
+                &analysis_module,
+                "fs_analysis_geometry",
+                &[masks_target],
+            ),
+            analysis_depth,
+            camera_layout,
+            analysis_layout,
         }
     }
 }
@@ -268,6 +322,18 @@ impl Target {
         width: u32,
         height: u32,
     ) -> Self {
+        Self::with_usage(device, label, format, width, height, wgpu::TextureUsages::empty())
+    }
+
+    /// A target that can also be used as `extra` (e.g. bound as a texture).
+    pub(crate) fn with_usage(
+        device: &wgpu::Device,
+        label: &str,
+        format: wgpu::TextureFormat,
+        width: u32,
+        height: u32,
+        extra: wgpu::TextureUsages,
+    ) -> Self {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
@@ -275,7 +341,7 @@ impl Target {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | extra,
             view_formats: &[],
         });
         let view = texture
@@ -300,7 +366,15 @@ impl CameraTargets {
             height,
             color: Target::new(device, &format!("{label} colour"), COLOR_FORMAT, width, height),
             masks: Target::new(device, &format!("{label} masks"), MASKS_FORMAT, width, height),
-            depth: Target::new(device, &format!("{label} depth"), DEPTH_FORMAT, width, height),
+            // Bound as a texture by the depth analysis pass.
+            depth: Target::with_usage(
+                device,
+                &format!("{label} depth"),
+                DEPTH_FORMAT,
+                width,
+                height,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
         }
     }
 }

@@ -18,16 +18,21 @@ pub(crate) const SHADOW_SLOT_STRIDE: u64 = 256;
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct CameraRaw {
     clip_from_world: [[f32; 4]; 4],
+    world_from_clip: [[f32; 4]; 4],
     eye: [f32; 4],
+    /// (ambient, analysis width, analysis height, 0).
     params: [f32; 4],
 }
 
 impl CameraRaw {
-    pub(crate) fn to_raw(camera: &Camera, ambient: f32) -> Self {
+    pub(crate) fn to_raw(camera: &Camera, ambient: f32, analysis_size: (u32, u32)) -> Self {
+        let clip_from_world = camera.clip_from_world();
         Self {
-            clip_from_world: camera.clip_from_world().as_mat4().to_cols_array_2d(),
+            clip_from_world: clip_from_world.as_mat4().to_cols_array_2d(),
+            // Inverted in f64: an f32 inverse loses ~far/near of precision.
+            world_from_clip: clip_from_world.inverse().as_mat4().to_cols_array_2d(),
             eye: camera.eye().as_vec3().extend(1.0).to_array(),
-            params: [ambient, 0.0, 0.0, 0.0],
+            params: [ambient, analysis_size.0 as f32, analysis_size.1 as f32, 0.0],
         }
     }
 }
