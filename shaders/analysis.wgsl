@@ -105,7 +105,7 @@ fn fs_analysis_depth(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<u3
     let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.items[i];
-        if dot(n, to_light(light, world)) > 0.0 {
+        if dot(n, to_light(light, world)) > 0.0 && in_cone(light, world) {
             facing |= 1u << i;
             if in_shadow(light, world) {
                 shadow |= 1u << i;

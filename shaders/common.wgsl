@@ -32,6 +32,9 @@ struct Light {
     flags: u32,
     // Linear light depth: (min distance, 1 / (max - min), 0, 0); see shadow.wgsl.
     depth: vec4<f32>,
+    // A spot light's cone: (unit axis, cos of the half-angle); w < -1 for
+    // lights without one.
+    spot: vec4<f32>,
 }
 
 struct Lights {
@@ -74,6 +77,13 @@ fn to_light(light: Light, world: vec3<f32>) -> vec3<f32> {
     return light.position.xyz - world * light.position.w;
 }
 
+// Whether the light reaches `world` at all: inside a spot light's cone
+// (always for other lights). Outside it the surface is unlit, not shadowed.
+fn in_cone(light: Light, world: vec3<f32>) -> bool {
+    let to_world = world - light.position.xyz;
+    return light.spot.w < -1.0 || dot(light.spot.xyz, to_world) >= light.spot.w * length(to_world);
+}
+
 // Hard shadow test of `world` against the light's map. Points outside the
 // map, or behind the light's image plane, count as lit.
 fn in_shadow(light: Light, world: vec3<f32>) -> bool {
@@ -104,7 +114,8 @@ struct Shading {
     color: vec3<f32>,
     // Bit i: light i is blocked here (only set where `facing` is).
     shadow: u32,
-    // Bit i: the surface faces light i (interpolated normal · to-light > 0).
+    // Bit i: light i reaches the surface, occluders aside: it faces the
+    // light (interpolated normal · to-light > 0) inside a spot light's cone.
     facing: u32,
 }
 
@@ -118,7 +129,7 @@ fn shade(in: VertexOutput) -> Shading {
     for (var i = 0u; i < count; i++) {
         let light = lights.items[i];
         let n_dot_l = dot(n, normalize(to_light(light, in.world)));
-        if n_dot_l > 0.0 {
+        if n_dot_l > 0.0 && in_cone(light, in.world) {
             out.facing |= 1u << i;
             if in_shadow(light, in.world) {
                 out.shadow |= 1u << i;

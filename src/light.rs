@@ -67,6 +67,29 @@ impl Light {
         }
     }
 
+    /// Whether the light can reach `point` at all, occluders aside: inside a
+    /// spot light's cone (its boundary included); always for point and
+    /// directional lights.
+    #[must_use]
+    pub fn reaches(&self, point: DVec3) -> bool {
+        match *self {
+            Self::Spot { position, direction, outer_half_angle_radians } => {
+                let to_point = point - position;
+                direction.dot(to_point) >= outer_half_angle_radians.cos() * to_point.length()
+            }
+            Self::Directional { .. } | Self::Point { .. } => true,
+        }
+    }
+
+    /// The cone of a spot light as (unit axis, cosine of the half-angle).
+    #[must_use]
+    pub fn cone(&self) -> Option<(DVec3, f64)> {
+        match *self {
+            Self::Spot { direction, outer_half_angle_radians, .. } => Some((direction, outer_half_angle_radians.cos())),
+            Self::Directional { .. } | Self::Point { .. } => None,
+        }
+    }
+
     /// Checks that every value is finite and the light is well formed.
     ///
     /// # Errors

@@ -6,7 +6,7 @@ use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Mat4};
 use crate::camera::viewport_matrix;
 use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
-use crate::light::LightFrame;
+use crate::light::{Light, LightFrame};
 use crate::scene::ShadowMapSize;
 use crate::tolerance::Tolerances;
 
@@ -144,6 +144,9 @@ pub fn light_distance(frame: &LightFrame, world: DVec3) -> f64 {
 pub struct LightMatrix {
     /// World to light clip space.
     pub clip_from_world: DMat4,
+    /// The light the map was made for (a renderer applies a spot light's
+    /// cone with it: outside the cone the light does not reach).
+    pub light: Light,
     /// The light frame the homography acts in.
     pub frame: LightFrame,
     /// `G`: rows `g1`, `g2` (NDC x and y), `j` (the optical axis, unit length).
@@ -265,6 +268,7 @@ pub(crate) fn fit_homography(
 
 /// Everything needed to turn an optical axis into a [`LightMatrix`].
 pub(crate) struct Placement<'a> {
+    pub light: Light,
     pub frame: LightFrame,
     /// Optical axis, any positive scale.
     pub axis: DVec3,
@@ -354,6 +358,7 @@ impl Placement<'_> {
         let light_distance = LightDistance { min: lo - pad * span, max: hi + pad * span };
         LightMatrix {
             clip_from_world,
+            light: self.light,
             frame: self.frame,
             homography,
             depth,

@@ -277,6 +277,7 @@ impl ShadowProblem {
         fallback: Option<Fallback>,
     ) -> Result<LightMatrix> {
         Placement {
+            light: self.light,
             frame,
             axis,
             focus: focus.vertices(),

@@ -8,8 +8,9 @@
 ///
 /// * `depth`: the camera's depth-buffer value in `[0, 1]` (wgpu range);
 ///   exactly `1.0` where nothing was hit (background).
-/// * `facing`: the surface faces light `i` (`interpolated normal · to-light > 0`),
-///   i.e. it would receive light `i` if unshadowed.
+/// * `facing`: the surface faces light `i` (`interpolated normal · to-light > 0`)
+///   and lies inside its cone for a spot light, i.e. it would receive light
+///   `i` if unshadowed.
 /// * `shadow`: light `i` is blocked; only ever set where `facing` is.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ShadowMasks {

@@ -361,7 +361,7 @@ impl RayCaster {
                 Light::Directional { direction } => -direction.as_vec3(),
                 Light::Point { position } | Light::Spot { position, .. } => position.as_vec3() - point,
             };
-            if shading.dot(to_light) > 0.0 {
+            if shading.dot(to_light) > 0.0 && light.reaches(point.as_dvec3()) {
                 facing |= 1 << i;
                 if self.in_shadow(point, geometric, light) {
                     shadow |= 1 << i;

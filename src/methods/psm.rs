@@ -157,6 +157,7 @@ fn place(
     let mut depth_points = problem.caster_body(focus).vertices().to_vec();
     depth_points.extend_from_slice(region.vertices());
     crate::matrix::Placement {
+        light: *problem.light(),
         frame,
         axis,
         focus: &points,

@@ -327,6 +327,7 @@ impl Optimizer {
         let problem = &samples.problem;
         let fit = self.fit_options(samples);
         Placement {
+            light: *problem.light(),
             frame: samples.frame,
             axis: homography.row(2),
             focus: &[],

@@ -49,6 +49,8 @@ pub(crate) struct LightRaw {
     flags: u32,
     /// Linear depth: (min distance, 1 / (max - min), 0, 0).
     depth: [f32; 4],
+    /// A spot light's cone: (unit axis, cos half-angle); w = -2 for no cone.
+    spot: [f32; 4],
 }
 
 impl LightRaw {
@@ -66,6 +68,10 @@ impl LightRaw {
             depth: {
                 let [min, inv_span] = linear_depth_range(matrix);
                 [min, inv_span, 0.0, 0.0]
+            },
+            spot: match matrix.light.cone() {
+                Some((axis, cos)) => axis.as_vec3().extend(cos as f32).to_array(),
+                None => [0.0, 0.0, 0.0, -2.0],
             },
         }
     }
@@ -170,5 +176,5 @@ impl VertexRaw {
 }
 
 const _: () = assert!(std::mem::size_of::<ShadowPassRaw>() as u64 == SHADOW_SLOT_STRIDE);
-const _: () = assert!(std::mem::size_of::<LightRaw>() == 128);
+const _: () = assert!(std::mem::size_of::<LightRaw>() == 144);
 const _: () = assert!(std::mem::size_of::<VertexRaw>() == 28);
