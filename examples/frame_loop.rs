@@ -1,7 +1,8 @@
 //! The frame loop: a camera walk and moving lights over the default scene,
 //! with the optimizer cadence of the paper (analysis pass every 3 frames,
-//! every 4th of them with standard maps, asynchronous readback). Writes PNG
-//! frames and a per-frame timing CSV (GPU timestamps where available).
+//! each light looked up in a small focused map every 5th pass, asynchronous
+//! readback). Writes PNG frames and a per-frame timing CSV (GPU timestamps
+//! where available).
 //!
 //! ```text
 //! cargo run --release --example frame_loop -- [--preset tiny|small|default] [--obj file.obj]

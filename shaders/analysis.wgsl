@@ -7,12 +7,16 @@
 // full-resolution point ((x, y) + 0.5) * viewport / analysis size:
 //
 // - `fs_analysis_depth` (the default) draws one full-screen triangle and
-//   reads the camera pass's depth buffer, so the scene is not drawn a second
-//   time. It reconstructs the surface at that point from the nearest
+//   reads the camera pass's depth buffer and masks, so the scene is not drawn
+//   a second time. It takes the surface at that point from the nearest
 //   full-resolution pixel and the one-sided depth differences that continue
 //   its surface (screen-space depth is affine on planes, so this is exact
-//   there), the normal from the same differences, and looks the point up in
-//   the analysis lights' maps.
+//   there). Lights whose map is the frame's own (`lights.camera_bits`) take
+//   that pixel's bits from the camera pass; the others (the periodic focused
+//   maps, listed in `lights.lookup`) are looked up here at the reconstructed
+//   world point, with the camera pass's interpolated normal. (The loop runs
+//   over that list only: a software rasterizer runs a branch's body even
+//   when no lane takes it.)
 // - `fs_analysis_geometry` draws the scene again at the analysis resolution
 //   (interpolated positions and normals).
 //
@@ -20,6 +24,7 @@
 // target, so that the pass also runs where R32Float is not renderable (GL).
 
 @group(0) @binding(3) var camera_depth: texture_depth_2d;
+@group(0) @binding(4) var camera_masks: texture_2d<u32>;
 
 @fragment
 fn fs_analysis_geometry(in: VertexOutput) -> @location(0) vec4<u32> {
@@ -61,6 +66,16 @@ fn depth_slope(before: f32, centre: f32, after: f32) -> f32 {
     return 0.0;
 }
 
+// Inverse of `pack_normal` in common.wgsl.
+fn unpack_normal(packed: u32) -> vec3<f32> {
+    let p = unpack2x16snorm(packed);
+    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
+    if n.z < 0.0 {
+        n = vec3<f32>((1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(n);
+}
+
 // World position of full-resolution screen point `q` (pixels, y down) at
 // depth-buffer value `depth`.
 fn unproject(q: vec2<f32>, depth: f32, size: vec2<f32>) -> vec3<f32> {
@@ -90,20 +105,15 @@ fn fs_analysis_depth(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<u3
     // (Kept below 1.0, which would read as background.)
     let depth_q = clamp(depth + dot(slope, q - (vec2<f32>(p) + 0.5)), 0.0, bitcast<f32>(0x3f7fffffu));
     let world = unproject(q, depth_q, size);
-    let along_x = unproject(q + vec2<f32>(1.0, 0.0), depth_q + slope.x, size) - world;
-    let along_y = unproject(q + vec2<f32>(0.0, 1.0), depth_q + slope.y, size) - world;
-    var n = cross(along_x, along_y);
-    let to_eye = camera.eye.xyz - world;
-    if dot(n, n) == 0.0 {
-        n = to_eye;
-    }
-    // Towards the viewer: the side of the surface that is seen.
-    n = normalize(select(n, -n, dot(n, to_eye) < 0.0));
+    // The camera pass's words at that pixel (see `mask_words`).
+    let words = textureLoad(camera_masks, p, 0);
+    let n = unpack_normal(words.w);
 
-    var shadow = 0u;
-    var facing = 0u;
-    let count = min(lights.count, MAX_LIGHTS);
-    for (var i = 0u; i < count; i++) {
+    var shadow = words.y & lights.camera_bits;
+    var facing = words.z & lights.camera_bits;
+    let count = min(lights.lookup_count, MAX_LIGHTS);
+    for (var k = 0u; k < count; k++) {
+        let i = lights.lookup[k / 4u][k % 4u];
         let light = lights.items[i];
         if dot(n, to_light(light, world)) > 0.0 && in_cone(light, world) {
             facing |= 1u << i;
@@ -112,5 +122,5 @@ fn fs_analysis_depth(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<u3
             }
         }
     }
-    return vec4<u32>(bitcast<u32>(depth_q), shadow, facing, pack_normal(n));
+    return vec4<u32>(bitcast<u32>(depth_q), shadow, facing, words.w);
 }

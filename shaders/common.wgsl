@@ -39,9 +39,13 @@ struct Light {
 
 struct Lights {
     count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // Analysis pass only (the camera pass ignores them): bit i set when
+    // light i's map is the frame's own, so the camera pass's bits apply; the
+    // other lights' indices, four per vector, and how many there are.
+    camera_bits: u32,
+    lookup_count: u32,
+    _pad: u32,
+    lookup: array<vec4<u32>, 8>,
     items: array<Light, MAX_LIGHTS>,
 }
 

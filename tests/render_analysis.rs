@@ -162,7 +162,13 @@ fn analysis_reuses_the_frames_maps_where_the_matrices_agree() {
     assert_eq!(passes, 3, "one extra map");
     let (_, reference) = run(&mixed_lights, None);
     let bit = |m: &AnalysisReadback, light: u32| m.masks.shadow.iter().map(|w| w >> light & 1).collect::<Vec<_>>();
+    // Light 0: the camera pass's bits either way.
     assert_eq!(bit(&mixed, 0), bit(&own, 0));
-    assert_eq!(bit(&mixed, 1), bit(&reference, 1));
+    // Light 1: looked up by the analysis pass at the analysis pixel's point,
+    // against the camera pass's bits at the nearest full-resolution pixel
+    // when the small map is the frame's own; they differ only on boundaries.
+    let (a, b) = (bit(&mixed, 1), bit(&reference, 1));
+    let same = a.iter().zip(&b).filter(|(x, y)| x == y).count() as f64 / a.len() as f64;
+    assert!(same >= 0.99, "light 1 agrees on {same:.4}");
     assert_ne!(bit(&mixed, 1), bit(&own, 1), "a 200² map draws different boundaries than a 1024² one");
 }

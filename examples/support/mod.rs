@@ -247,7 +247,7 @@ pub fn run_loop(
 
     let bounds = scene.bounds();
     // Per-light matrices and the paper's cadence (analysis every 3 frames,
-    // every 5th of them with focused maps), independent of the renderer.
+    // each light's focused lookup every 5th pass), independent of the renderer.
     let mut scheduler =
         ShadowScheduler::new(config.lights, ScheduleOptions::default(), Optimizer::new(Default::default()))
             .map_err(|e| e.to_string())?;

@@ -1,13 +1,16 @@
 //! The paper's Table 2: frame time against the number of lights and the map
 //! resolution, for scene-optimized, focused and LiSPSM maps, measured in one
-//! run so that the ratios are comparable.
+//! run so that the ratios are comparable; plus "focused + analysis" (focused
+//! maps shown while the analysis passes, readbacks and optimizations run and
+//! are thrown away), which isolates the machinery's own cost from what the
+//! optimized maps' shapes do to the shadow and camera passes.
 //!
-//! The three pipelines are interleaved in blocks of whole optimizer cadences
-//! (15 frames: five analysis passes, one of them with focused maps), the
-//! order rotating from round to round, so that drift in the machine's speed
-//! reaches all three alike. A block is timed from an idle device to an idle
-//! device, so it holds all the GPU work of its frames; within a block at most
-//! one frame is in flight besides the one being built.
+//! The four pipelines are interleaved in blocks of whole optimizer cadences
+//! (15 frames: five analysis passes, each light looked up once in a focused
+//! map), the order rotating from round to round, so that drift in the
+//! machine's speed reaches all of them alike. A block is timed from an idle
+//! device to an idle device, so it holds all the GPU work of its frames;
+//! within a block at most one frame is in flight besides the one being built.
 
 use std::time::{Duration, Instant};
 

@@ -205,15 +205,17 @@ fn facing_winding(m: &glam::DMat4, p: glam::DVec3, towards: glam::DVec3) -> f64 
 /// Where the analysis pass gets the visible surface from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AnalysisSource {
-    /// A full-screen pass over the camera pass's depth buffer (no second
-    /// geometry pass; its cost does not grow with the scene). Each analysis
-    /// pixel stands for the full-resolution point at its scaled centre: the
-    /// surface there is extrapolated from the nearest full-resolution pixel
-    /// along the one-sided depth differences that continue its surface
-    /// (exact on planes, where screen-space depth is affine), the normal is
-    /// the cross product of the same differences (a face normal, turned
-    /// towards the viewer), and the world position is reconstructed from the
-    /// 32-bit depth.
+    /// A full-screen pass over the camera pass's depth buffer and masks (no
+    /// second geometry pass; its cost does not grow with the scene). Each
+    /// analysis pixel stands for the full-resolution point at its scaled
+    /// centre: the depth there is extrapolated from the nearest
+    /// full-resolution pixel along the one-sided depth differences that
+    /// continue its surface (exact on planes, where screen-space depth is
+    /// affine). Lights whose analysis map is the frame's own take that
+    /// pixel's shadow and facing bits from the camera pass, which then writes
+    /// its masks on analysis frames; others (the periodic focused maps) are
+    /// looked up at the world point reconstructed from the 32-bit depth, with
+    /// the camera pass's interpolated normal.
     #[default]
     CameraDepth,
     /// Draws the scene again at the analysis resolution, with interpolated
@@ -530,6 +532,7 @@ impl Renderer {
             let color = light_color(lights.len());
             lights.iter().enumerate().map(|(i, m)| LightRaw::to_raw(m, layer(i), color)).collect()
         };
+
         self.queue.write_buffer(
             &self.camera_uniforms,
             0,
@@ -541,11 +544,20 @@ impl Renderer {
             bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(frame.lights, &|i| i as u32))),
         );
         if frame.analysis.is_some() {
-            let raw = match analysis_lights {
-                Some(lights) => raw_lights(lights, &|i| analysis_layers[i]),
-                None => raw_lights(frame.lights, &|i| i as u32),
+            let (raw, layers): (_, &dyn Fn(usize) -> u32) = match analysis_lights {
+                Some(lights) => (raw_lights(lights, &|i| analysis_layers[i]), &|i| analysis_layers[i]),
+                None => (raw_lights(frame.lights, &|i| i as u32), &|i| i as u32),
             };
-            self.queue.write_buffer(&self.analysis_bindings.lights, 0, bytemuck::bytes_of(&LightsRaw::to_raw(&raw)));
+            // The depth analysis takes the camera pass's bits of a light whose
+            // map is the frame's own (the camera pass then writes its masks).
+            let camera_bits = match self.options.analysis_source {
+                AnalysisSource::CameraDepth => (0..raw.len().min(frame.lights.len()))
+                    .filter(|&i| layers(i) == i as u32)
+                    .fold(0u32, |bits, i| bits | 1 << i),
+                AnalysisSource::Geometry => 0,
+            };
+            let lights = LightsRaw::with_camera_bits(&raw, camera_bits);
+            self.queue.write_buffer(&self.analysis_bindings.lights, 0, bytemuck::bytes_of(&lights));
         }
         let shadow_raw: Vec<ShadowPassRaw> =
             slots.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
@@ -557,21 +569,18 @@ impl Renderer {
             label: Some(&format!("lixel frame {}", self.frame)),
         });
         let timer = self.timer.as_mut().and_then(GpuTimer::begin_frame);
+        // A full ring skips the analysis (never waits for a slot).
+        let analysis_staging = frame.analysis.and_then(|_| self.ring.acquire().map(|(slot, b)| (slot, b.clone())));
+        let analysis_skipped = frame.analysis.is_some() && analysis_staging.is_none();
         let unclipped_unavailable = self.encode_shadow_passes(&mut encoder, &slots, timer.as_ref());
-        self.encode_camera_pass(&mut encoder, frame.masks, timer.as_ref());
-
-        let mut analysis_skipped = false;
-        let mut analysis_slot = None;
-        if frame.analysis.is_some() {
-            match self.ring.acquire() {
-                Some((slot, buffer)) => {
-                    let buffer = buffer.clone();
-                    self.encode_analysis_pass(&mut encoder, &buffer, timer.as_ref());
-                    analysis_slot = Some(slot);
-                }
-                None => analysis_skipped = true,
-            }
-        }
+        // The depth analysis reads the camera pass's masks.
+        let camera_masks =
+            frame.masks || (analysis_staging.is_some() && self.options.analysis_source == AnalysisSource::CameraDepth);
+        self.encode_camera_pass(&mut encoder, camera_masks, timer.as_ref());
+        let analysis_slot = analysis_staging.map(|(slot, buffer)| {
+            self.encode_analysis_pass(&mut encoder, &buffer, timer.as_ref());
+            slot
+        });
         if let (Some(t), Some(timer)) = (timer.as_ref(), self.timer.as_ref()) {
             timer.resolve(&mut encoder, t);
         }
@@ -673,15 +682,11 @@ impl Renderer {
             // It binds the camera depth.
             self.analysis_bindings.bind_group = None;
         }
-        let camera_depth = &self.camera_targets.as_ref().expect("created above").depth.view;
-        for (bindings, layout, depth, label) in [
+        let camera = self.camera_targets.as_ref().expect("created above");
+        let camera_views = Some((&camera.depth.view, &camera.masks.view));
+        for (bindings, layout, views, label) in [
             (&mut self.camera_bindings, &self.passes.camera_layout, None, "lixel camera bind group"),
-            (
-                &mut self.analysis_bindings,
-                &self.passes.analysis_layout,
-                Some(camera_depth),
-                "lixel analysis bind group",
-            ),
+            (&mut self.analysis_bindings, &self.passes.analysis_layout, camera_views, "lixel analysis bind group"),
         ] {
             if bindings.bind_group.is_none() {
                 let mut entries = vec![
@@ -692,9 +697,11 @@ impl Renderer {
                         resource: wgpu::BindingResource::TextureView(&self.shadow_maps.array_view),
                     },
                 ];
-                if let Some(depth) = depth {
+                if let Some((depth, masks)) = views {
                     entries
                         .push(wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(depth) });
+                    entries
+                        .push(wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(masks) });
                 }
                 bindings.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some(label),

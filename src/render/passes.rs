@@ -153,7 +153,8 @@ impl ShadowPass {
 
 /// The camera and analysis passes: the camera pass and the geometry
 /// analysis share the vertex stage; the depth analysis draws one full-screen
-/// triangle. The analysis layout adds the camera pass's depth (binding 3).
+/// triangle. The analysis layout adds the camera pass's depth (binding 3)
+/// and masks (binding 4).
 pub(crate) struct ScenePasses {
     pub(crate) camera_layout: wgpu::BindGroupLayout,
     pub(crate) analysis_layout: wgpu::BindGroupLayout,
@@ -210,6 +211,16 @@ impl ScenePasses {
                 scene_entries[1],
                 scene_entries[2],
                 depth_texture(3, wgpu::TextureViewDimension::D2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         });
         let pipeline_layout = |label, layout| {
@@ -365,8 +376,15 @@ impl CameraTargets {
             width,
             height,
             color: Target::new(device, &format!("{label} colour"), COLOR_FORMAT, width, height),
-            masks: Target::new(device, &format!("{label} masks"), MASKS_FORMAT, width, height),
-            // Bound as a texture by the depth analysis pass.
+            // Both bound as textures by the depth analysis pass.
+            masks: Target::with_usage(
+                device,
+                &format!("{label} masks"),
+                MASKS_FORMAT,
+                width,
+                height,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
             depth: Target::with_usage(
                 device,
                 &format!("{label} depth"),

@@ -82,17 +82,36 @@ impl LightRaw {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct LightsRaw {
     count: u32,
-    _pad: [u32; 3],
+    /// Analysis pass: bit i set when light i's bits come from the camera pass.
+    camera_bits: u32,
+    /// Analysis pass: how many lights it looks up itself ...
+    lookup_count: u32,
+    _pad: u32,
+    /// ... and their indices, four per vector.
+    lookup: [[u32; 4]; MAX_LIGHTS / 4],
     items: [LightRaw; MAX_LIGHTS],
 }
 
 impl LightsRaw {
-    /// Up to [`MAX_LIGHTS`] lights (the caller checks the count).
+    /// Up to [`MAX_LIGHTS`] lights (the caller checks the count), every one
+    /// looked up by the pass itself.
     pub(crate) fn to_raw(lights: &[LightRaw]) -> Self {
+        Self::with_camera_bits(lights, 0)
+    }
+
+    /// As [`to_raw`](Self::to_raw), but lights in the `camera_bits` mask take
+    /// their bits from the camera pass (analysis pass only).
+    pub(crate) fn with_camera_bits(lights: &[LightRaw], camera_bits: u32) -> Self {
         let mut raw = Self::zeroed();
         let n = lights.len().min(MAX_LIGHTS);
         raw.count = n as u32;
         raw.items[..n].copy_from_slice(&lights[..n]);
+        raw.camera_bits = camera_bits;
+        for i in (0..n).filter(|&i| camera_bits >> i & 1 == 0) {
+            let k = raw.lookup_count as usize;
+            raw.lookup[k / 4][k % 4] = i as u32;
+            raw.lookup_count += 1;
+        }
         raw
     }
 }
