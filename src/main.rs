@@ -127,6 +127,11 @@ struct ExperimentArgs {
     /// Square map sizes of the timing table, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [500, 700, 1000])]
     timing_maps: Vec<u32>,
+    /// Also report GPU time per stage (timestamp queries). On lavapipe they
+    /// serialize the passes and add to every frame: read the frame times of
+    /// such a run as a breakdown, not as the table.
+    #[arg(long)]
+    timing_gpu_stages: bool,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -225,6 +230,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             frames: args.timing_frames,
             lights: args.timing_lights.clone(),
             maps: args.timing_maps.clone(),
+            gpu_stages: args.timing_gpu_stages,
             ..Default::default()
         };
         eprintln!(

@@ -33,7 +33,7 @@ use crate::{
 
 pub use images::error_overlay;
 pub use report::{markdown, ConfigRow, MethodSummary, Summary};
-pub use timing::{run_timing, timing_markdown, TimingOptions, TimingRow};
+pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
 
 /// A method of the experiment.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

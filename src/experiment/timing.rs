@@ -18,7 +18,7 @@ use glam::DVec3;
 
 use super::{camera_for, light_for, load_scene, ExperimentConfig, ExperimentError};
 use crate::optimize::{Optimizer, ScheduleOptions, ShadowScheduler};
-use crate::render::{AnalysisRequest, Frame, Renderer};
+use crate::render::{AnalysisRequest, Frame, GpuFrameTimes, Renderer, RendererOptions};
 use crate::{Camera, Light, LightMatrix, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
 
 /// What to time.
@@ -36,11 +36,24 @@ pub struct TimingOptions {
     pub block: usize,
     /// Untimed blocks of each pipeline before the timed rounds of a cell.
     pub warmup_blocks: usize,
+    /// Collect GPU time per stage ([`StageTimes`]) with timestamp queries.
+    /// Off by default: timestamps add work at every pass boundary, more for
+    /// pipelines with more passes (on lavapipe, 4 lights, 1000² maps, one run
+    /// each: optimized / focused 1.14 with them, 1.07 without), so a run with
+    /// them is a breakdown, not the table.
+    pub gpu_stages: bool,
 }
 
 impl Default for TimingOptions {
     fn default() -> Self {
-        Self { lights: vec![1, 2, 3, 4], maps: vec![500, 700, 1000], frames: 60, block: 15, warmup_blocks: 1 }
+        Self {
+            lights: vec![1, 2, 3, 4],
+            maps: vec![500, 700, 1000],
+            frames: 60,
+            block: 15,
+            warmup_blocks: 1,
+            gpu_stages: false,
+        }
     }
 }
 
@@ -63,15 +76,91 @@ pub struct TimingRow {
     /// used: the machinery's own cost, apart from what the optimized maps'
     /// shapes do to the shadow and camera passes.
     pub focused_with_analysis: Duration,
-    /// Per-round ratios optimized / focused (each round times one block of
-    /// each pipeline back to back): median, smallest and largest.
-    pub round_ratios: [f64; 3],
+    /// Wall time of every timed block, per pipeline in the order of
+    /// [`PIPELINES`]; block `k` of every pipeline belongs to round `k` (the
+    /// same frames of the walk, timed back to back), so they pair up.
+    pub blocks: [Vec<Duration>; 4],
     /// Timed rounds.
     pub rounds: usize,
     /// Optimizations run during the timed frames.
     pub optimizations: usize,
     /// Analysis passes queued during the timed frames.
     pub analyses: usize,
+    /// Mean process CPU time per frame (all threads, lavapipe's included),
+    /// per pipeline in the order of [`PIPELINES`]; `None` off Linux.
+    pub cpu: [Option<Duration>; 4],
+    /// Where each pipeline's frame time went, in the order focused, LiSPSM,
+    /// scene-optimized, focused + analysis ([`PIPELINES`]).
+    pub stages: [StageTimes; 4],
+}
+
+/// The pipelines of a [`TimingRow`], in the order of [`TimingRow::stages`].
+pub const PIPELINES: [&str; 4] = ["focused", "LiSPSM", "scene-optimized", "focused + analysis"];
+
+/// Mean cost per frame of one pipeline's stages over the timed frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// GPU time of the shadow passes (timestamp queries; `None` without
+    /// them). Includes the analysis pass's own focused maps.
+    pub shadow: Option<Duration>,
+    /// GPU time of the camera pass.
+    pub camera: Option<Duration>,
+    /// GPU time of the analysis pass, averaged over every frame (zero for
+    /// pipelines without one).
+    pub analysis: Option<Duration>,
+    /// CPU time turning readbacks into samples and optimizing, averaged over
+    /// every frame.
+    pub optimize: Duration,
+    /// CPU time solving the frame's matrices (focused, LiSPSM, and the
+    /// analysis pass's focused maps), averaged over every frame.
+    pub solve: Duration,
+    /// Frames whose GPU timestamps came back (a sample of the timed frames).
+    pub gpu_frames: usize,
+}
+
+/// Running sums behind a [`StageTimes`].
+#[derive(Clone, Copy, Debug, Default)]
+struct StageSums {
+    shadow: Duration,
+    camera: Duration,
+    analysis: Duration,
+    gpu_frames: u32,
+    optimize: Duration,
+    solve: Duration,
+    frames: u32,
+}
+
+impl StageSums {
+    fn add_gpu(&mut self, times: &GpuFrameTimes) {
+        let (Some(camera), Some(shadow)) = (times.camera, times.shadow) else { return };
+        self.shadow += shadow;
+        self.camera += camera;
+        self.analysis += times.analysis.unwrap_or_default();
+        self.gpu_frames += 1;
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.shadow += other.shadow;
+        self.camera += other.camera;
+        self.analysis += other.analysis;
+        self.gpu_frames += other.gpu_frames;
+        self.optimize += other.optimize;
+        self.solve += other.solve;
+        self.frames += other.frames;
+    }
+
+    fn means(&self) -> StageTimes {
+        let gpu = |d: Duration| (self.gpu_frames > 0).then(|| d / self.gpu_frames);
+        let cpu = |d: Duration| d / self.frames.max(1);
+        StageTimes {
+            shadow: gpu(self.shadow),
+            camera: gpu(self.camera),
+            analysis: gpu(self.analysis),
+            optimize: cpu(self.optimize),
+            solve: cpu(self.solve),
+            gpu_frames: self.gpu_frames as usize,
+        }
+    }
 }
 
 impl TimingRow {
@@ -79,6 +168,18 @@ impl TimingRow {
     #[must_use]
     pub fn optimized_ratio(&self) -> f64 {
         self.optimized.as_secs_f64() / self.focused.as_secs_f64()
+    }
+
+    /// Per-round ratios of pipeline `k` ([`PIPELINES`]) to focused.
+    #[must_use]
+    pub fn round_ratios(&self, k: usize) -> Vec<f64> {
+        self.blocks[k].iter().zip(&self.blocks[0]).map(|(p, f)| p.as_secs_f64() / f.as_secs_f64()).collect()
+    }
+
+    /// Mean optimized / focused process CPU time per frame.
+    #[must_use]
+    pub fn optimized_cpu_ratio(&self) -> Option<f64> {
+        Some(self.cpu[2]?.as_secs_f64() / self.cpu[0]?.as_secs_f64())
     }
 
     /// Mean (focused + analysis) / focused frame time.
@@ -141,12 +242,28 @@ struct Run {
     optimizations: usize,
     analyses: usize,
     timed: Vec<Duration>,
+    /// CPU time of each timed block (`None` where unavailable).
+    cpu: Vec<Option<Duration>>,
+    /// Sums over the timed blocks.
+    sums: StageSums,
+    /// Sums of the last block.
+    last_sums: StageSums,
 }
 
 impl Run {
     fn new(pipeline: Pipeline, lights: usize) -> Result<Self, ExperimentError> {
         let scheduler = ShadowScheduler::new(lights, ScheduleOptions::default(), Optimizer::new(Default::default()))?;
-        Ok(Self { pipeline, frame: 0, scheduler, optimizations: 0, analyses: 0, timed: Vec::new() })
+        Ok(Self {
+            pipeline,
+            frame: 0,
+            scheduler,
+            optimizations: 0,
+            analyses: 0,
+            timed: Vec::new(),
+            cpu: Vec::new(),
+            sums: StageSums::default(),
+            last_sums: StageSums::default(),
+        })
     }
 
     /// Feeds every light the newest readback, if one has arrived (never waits).
@@ -163,17 +280,27 @@ impl Run {
     }
 
     /// Renders `frames` frames from an idle device to an idle device and
-    /// returns the wall time.
-    fn block(&mut self, renderer: &mut Renderer, cell: &Cell<'_>, frames: usize) -> Result<Duration, ExperimentError> {
+    /// returns the wall time and the process's CPU time.
+    fn block(
+        &mut self,
+        renderer: &mut Renderer,
+        cell: &Cell<'_>,
+        frames: usize,
+    ) -> Result<(Duration, Option<Duration>), ExperimentError> {
         renderer.wait_idle()?;
+        let cpu_start = process_cpu_time();
         let start = Instant::now();
         let mut previous = None;
         let (mut optimizations, mut analyses) = (0, 0);
+        let mut sums = StageSums::default();
         for _ in 0..frames {
             let camera = walk(&cell.base, self.frame);
             if self.pipeline.analyses() {
+                let started = Instant::now();
                 optimizations += self.consume_readback(renderer, cell)?;
+                sums.optimize += started.elapsed();
             }
+            let solving = Instant::now();
             let matrices = match self.pipeline {
                 Pipeline::Focused | Pipeline::FocusedWithAnalysis => {
                     cell.solve(camera, cell.map, &Parameterization::Focused)?
@@ -208,6 +335,7 @@ impl Run {
                     }
                 }
             }
+            sums.solve += solving.elapsed();
             let request = analysis.then(|| AnalysisRequest {
                 lights: (!analysis_lights.is_empty()).then_some(&analysis_lights[..]),
                 tag: 0,
@@ -219,13 +347,71 @@ impl Run {
             if let Some(prev) = previous.replace(report.submission) {
                 renderer.wait_for(&prev)?;
             }
+            while let Some(times) = renderer.try_take_gpu_times() {
+                sums.add_gpu(&times);
+            }
             self.frame += 1;
+            sums.frames += 1;
         }
         renderer.wait_idle()?;
         let elapsed = start.elapsed();
+        let cpu = process_cpu_time().zip(cpu_start).map(|(end, begin)| end.saturating_sub(begin));
+        while let Some(times) = renderer.try_take_gpu_times() {
+            sums.add_gpu(&times);
+        }
         self.optimizations += optimizations;
         self.analyses += analyses;
-        Ok(elapsed)
+        self.last_sums = sums;
+        Ok((elapsed, cpu))
+    }
+}
+
+/// CPU time of this process so far, all threads together (on lavapipe the
+/// "GPU" is the rasterizer's threads, so this is the work a frame costs, less
+/// exposed to other load on the machine than wall time). Linux only (the sum
+/// of `/proc/self/task/*/schedstat`); `None` elsewhere.
+fn process_cpu_time() -> Option<Duration> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let Ok(task) = task else { continue };
+        // A thread may exit between listing and reading: skip it.
+        let Ok(text) = std::fs::read_to_string(task.path().join("schedstat")) else { continue };
+        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(Duration::from_nanos(total))
+}
+
+/// A ratio estimated from paired blocks: the geometric mean of the per-block
+/// ratios with a 95% confidence interval (normal approximation on the logs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RatioEstimate {
+    /// Geometric mean of the ratios.
+    pub ratio: f64,
+    /// Lower and upper ends of the 95% interval.
+    pub interval: [f64; 2],
+    /// Paired blocks behind it.
+    pub pairs: usize,
+}
+
+impl RatioEstimate {
+    /// `None` for fewer than two ratios or non-positive ones.
+    #[must_use]
+    pub fn from_ratios(ratios: &[f64]) -> Option<Self> {
+        if ratios.len() < 2 || ratios.iter().any(|&r| !(r > 0.0 && r.is_finite())) {
+            return None;
+        }
+        let n = ratios.len() as f64;
+        let logs: Vec<f64> = ratios.iter().map(|r| r.ln()).collect();
+        let mean = logs.iter().sum::<f64>() / n;
+        let variance = logs.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let half = 1.96 * (variance / n).sqrt();
+        Some(Self { ratio: mean.exp(), interval: [(mean - half).exp(), (mean + half).exp()], pairs: ratios.len() })
+    }
+}
+
+impl std::fmt::Display for RatioEstimate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.3} ({:.3}–{:.3})", self.ratio, self.interval[0], self.interval[1])
     }
 }
 
@@ -252,7 +438,8 @@ pub fn run_timing(
 ) -> Result<Vec<TimingRow>, ExperimentError> {
     let scene = load_scene(&config.scene)?;
     let base = camera_for(config, &scene)?;
-    let mut renderer = Renderer::new(device, queue, &scene, super::experiment_renderer_options())?;
+    let renderer_options = RendererOptions { timestamps: options.gpu_stages, ..super::experiment_renderer_options() };
+    let mut renderer = Renderer::new(device, queue, &scene, renderer_options)?;
     let block = options.block.max(1);
     let rounds = options.frames.div_ceil(block).max(1);
     let mut rows = Vec::new();
@@ -275,14 +462,15 @@ pub fn run_timing(
                 let pipelines = runs.len();
                 for k in 0..pipelines {
                     let run = &mut runs[(round + k) % pipelines];
-                    let elapsed = run.block(&mut renderer, &cell, block)?;
+                    let (elapsed, cpu) = run.block(&mut renderer, &cell, block)?;
                     run.timed.push(elapsed);
+                    run.cpu.push(cpu);
+                    run.sums.merge(&run.last_sums);
                 }
             }
-            let mean = |run: &Run| run.timed.iter().sum::<Duration>() / (rounds * block) as u32;
-            let mut ratios: Vec<f64> =
-                runs[2].timed.iter().zip(&runs[0].timed).map(|(o, f)| o.as_secs_f64() / f.as_secs_f64()).collect();
-            let (lowest, highest) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+            let frames = (rounds * block) as u32;
+            let mean = |run: &Run| run.timed.iter().sum::<Duration>() / frames;
+            let mean_cpu = |run: &Run| run.cpu.iter().copied().sum::<Option<Duration>>().map(|d| d / frames);
             let row = TimingRow {
                 lights: count,
                 map,
@@ -290,10 +478,12 @@ pub fn run_timing(
                 lispsm: mean(&runs[1]),
                 optimized: mean(&runs[2]),
                 focused_with_analysis: mean(&runs[3]),
-                round_ratios: [median(&mut ratios), lowest, highest],
+                blocks: [0, 1, 2, 3].map(|k| runs[k].timed.clone()),
                 rounds,
                 optimizations: runs[2].optimizations,
                 analyses: runs[2].analyses,
+                stages: [0, 1, 2, 3].map(|k| runs[k].sums.means()),
+                cpu: [0, 1, 2, 3].map(|k| mean_cpu(&runs[k])),
             };
             progress(&row);
             rows.push(row);
@@ -309,14 +499,15 @@ pub fn run_timing(
 #[must_use]
 pub fn timing_markdown(rows: &[TimingRow]) -> String {
     let mut md = String::from(
-        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | focused + analysis ms | LiSPSM / focused | optimized / focused | per round: median (min–max) | (focused + analysis) / focused | analyses | optimizations |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n",
+        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | focused + analysis ms | LiSPSM / focused | optimized / focused | optimized / focused, paired rounds (95% CI) | (focused + analysis) / focused | CPU time optimized / focused | analyses | optimizations |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|\n",
     );
     for r in rows {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
-        let [median, lowest, highest] = r.round_ratios;
+        let paired = RatioEstimate::from_ratios(&r.round_ratios(2)).map_or_else(|| "-".to_owned(), |e| e.to_string());
+        let cpu = r.optimized_cpu_ratio().map_or_else(|| "-".to_owned(), |c| format!("{c:.3}"));
         md.push_str(&format!(
-            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {median:.3} ({lowest:.3}–{highest:.3}) | {:.3} | {} | {} |\n",
+            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {paired} | {:.3} | {cpu} | {} | {} |\n",
             r.lights,
             r.map,
             ms(r.focused),
@@ -330,16 +521,69 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
             r.optimizations
         ));
     }
-    if !rows.is_empty() {
-        for (what, ratio) in [
-            ("Scene-optimized / focused", TimingRow::optimized_ratio as fn(&TimingRow) -> f64),
-            ("(Focused + analysis) / focused", TimingRow::analysis_ratio),
-        ] {
-            let mut all: Vec<f64> = rows.iter().map(ratio).collect();
-            let largest = all.iter().copied().fold(0.0f64, f64::max);
-            md.push_str(&format!("\n{what} over all cells: median {:.3}, largest {largest:.3}.", median(&mut all)));
+    if rows.is_empty() {
+        return md;
+    }
+    md.push_str(
+        "\nOver all cells (per-cell ratios of mean frame times: median and largest; every paired round of every \
+         cell: geometric mean with its 95% confidence interval):\n\n",
+    );
+    for (k, what) in [(2, "scene-optimized / focused"), (3, "(focused + analysis) / focused"), (1, "LiSPSM / focused")]
+    {
+        let mut cells: Vec<f64> = rows
+            .iter()
+            .map(|r| {
+                r.blocks[k].iter().sum::<Duration>().as_secs_f64() / r.blocks[0].iter().sum::<Duration>().as_secs_f64()
+            })
+            .collect();
+        let largest = cells.iter().copied().fold(0.0f64, f64::max);
+        let all: Vec<f64> = rows.iter().flat_map(|r| r.round_ratios(k)).collect();
+        let pooled = RatioEstimate::from_ratios(&all)
+            .map_or_else(|| "-".to_owned(), |e| format!("{e} over {} paired rounds", e.pairs));
+        md.push_str(&format!(
+            "- {what}: cells median {:.3}, largest {largest:.3}; all rounds {pooled}\n",
+            median(&mut cells)
+        ));
+    }
+    let mut cpu: Vec<f64> = rows.iter().filter_map(TimingRow::optimized_cpu_ratio).collect();
+    if !cpu.is_empty() {
+        md.push_str(&format!(
+            "- scene-optimized / focused, process CPU time (all threads): cells median {:.3}\n",
+            median(&mut cpu)
+        ));
+    }
+    md.push_str(&stages_markdown(rows));
+    md
+}
+
+/// Where each pipeline's frame time went, one row per cell and pipeline.
+fn stages_markdown(rows: &[TimingRow]) -> String {
+    let mut md = String::from(
+        "\nWhere the time went, ms per frame (GPU stages from timestamp queries on the frames whose stamps came back, \
+         `--timing-gpu-stages` only; CPU optimization and solving on the frame loop's thread and the process's CPU time, \
+         all threads, averaged over every frame):\n\n\
+         | lights | map | pipeline | frame | GPU shadow | GPU camera | GPU analysis | CPU optimize | CPU solve | GPU frames | CPU time (all threads) |\n\
+         |---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    let ms = |d: Duration| format!("{:.1}", d.as_secs_f64() * 1e3);
+    let gpu = |d: Option<Duration>| d.map_or_else(|| "-".to_owned(), ms);
+    for r in rows {
+        let frames = [r.focused, r.lispsm, r.optimized, r.focused_with_analysis];
+        for (((name, frame), stage), cpu) in PIPELINES.iter().zip(frames).zip(&r.stages).zip(r.cpu) {
+            md.push_str(&format!(
+                "| {} | {}² | {name} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                r.lights,
+                r.map,
+                ms(frame),
+                gpu(stage.shadow),
+                gpu(stage.camera),
+                gpu(stage.analysis),
+                ms(stage.optimize),
+                ms(stage.solve),
+                stage.gpu_frames,
+                gpu(cpu)
+            ));
         }
-        md.push('\n');
     }
     md
 }

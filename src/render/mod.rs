@@ -34,6 +34,7 @@
 //! [`Renderer::optional_features`] lists the features worth requesting.
 
 mod analysis;
+mod culling;
 mod output;
 mod passes;
 pub mod readback;
@@ -243,6 +244,10 @@ pub struct RendererOptions {
     pub background: Vec3,
     /// Record GPU timestamps when the device supports them.
     pub timestamps: bool,
+    /// Leave out of each scene pass the objects whose bounding box lies
+    /// outside its clip volume (the output is the same; see
+    /// [`FrameReport::shadow_triangles`]).
+    pub cull_objects: bool,
 }
 
 impl Default for RendererOptions {
@@ -256,6 +261,7 @@ impl Default for RendererOptions {
             ambient: 0.25,
             background: Vec3::new(0.55, 0.68, 0.85),
             timestamps: true,
+            cull_objects: true,
         }
     }
 }
@@ -303,6 +309,11 @@ pub struct FrameReport {
     /// Shadow passes rendered: one per light, plus one per analysis matrix
     /// that differs from the frame's light of the same index.
     pub shadow_passes: u32,
+    /// Triangles drawn by the shadow passes, all together (fewer than
+    /// `shadow_passes` x the scene's when objects were culled).
+    pub shadow_triangles: u64,
+    /// Triangles drawn by the camera pass.
+    pub camera_triangles: u64,
     /// CPU time spent encoding and submitting.
     pub cpu_time: std::time::Duration,
 }
@@ -312,6 +323,8 @@ struct GpuScene {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
+    /// Per-object index ranges and bounds, for culling.
+    objects: Vec<culling::ObjectBounds>,
 }
 
 /// Per-frame uniforms and bind group of one scene pass (camera or analysis).
@@ -390,8 +403,15 @@ impl Renderer {
 
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut indices = Vec::with_capacity(3 * scene.triangle_count());
+        let mut objects = Vec::with_capacity(scene.objects.len());
         for object in &scene.objects {
             let base = vertices.len() as u32;
+            let first = indices.len() as u32;
+            let count = object.mesh.indices.len() as u32;
+            objects.extend(culling::ObjectBounds::new(
+                first..first + count,
+                object.mesh.positions.iter().map(|p| p.as_dvec3()),
+            ));
             let albedo = (object.albedo.clamp(Vec3::ZERO, Vec3::ONE) * 255.0).round().as_uvec3();
             let albedo = [albedo.x as u8, albedo.y as u8, albedo.z as u8, 255];
             vertices.extend(object.mesh.positions.iter().zip(&object.mesh.normals).map(|(p, n)| VertexRaw {
@@ -413,6 +433,7 @@ impl Renderer {
                 usage: wgpu::BufferUsages::INDEX,
             }),
             index_count: indices.len() as u32,
+            objects,
         };
         let camera_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lixel camera uniforms"),
@@ -572,13 +593,13 @@ impl Renderer {
         // A full ring skips the analysis (never waits for a slot).
         let analysis_staging = frame.analysis.and_then(|_| self.ring.acquire().map(|(slot, b)| (slot, b.clone())));
         let analysis_skipped = frame.analysis.is_some() && analysis_staging.is_none();
-        let unclipped_unavailable = self.encode_shadow_passes(&mut encoder, &slots, timer.as_ref());
+        let (unclipped_unavailable, shadow_triangles) = self.encode_shadow_passes(&mut encoder, &slots, timer.as_ref());
         // The depth analysis reads the camera pass's masks.
         let camera_masks =
             frame.masks || (analysis_staging.is_some() && self.options.analysis_source == AnalysisSource::CameraDepth);
-        self.encode_camera_pass(&mut encoder, camera_masks, timer.as_ref());
+        let camera_triangles = self.encode_camera_pass(&mut encoder, frame.camera, camera_masks, timer.as_ref());
         let analysis_slot = analysis_staging.map(|(slot, buffer)| {
-            self.encode_analysis_pass(&mut encoder, &buffer, timer.as_ref());
+            self.encode_analysis_pass(&mut encoder, frame.camera, &buffer, timer.as_ref());
             slot
         });
         if let (Some(t), Some(timer)) = (timer.as_ref(), self.timer.as_ref()) {
@@ -603,6 +624,8 @@ impl Renderer {
             analysis_queued: analysis_slot.is_some(),
             unclipped_unavailable,
             shadow_passes: slots.len() as u32,
+            shadow_triangles,
+            camera_triangles,
             cpu_time: started.elapsed(),
         };
         self.frame += 1;
@@ -719,8 +742,9 @@ impl Renderer {
         encoder: &mut wgpu::CommandEncoder,
         slots: &[&LightMatrix],
         timer: Option<&timing::FrameQueries>,
-    ) -> u32 {
+    ) -> (u32, u64) {
         let mut unavailable = 0;
+        let mut triangles = 0;
         let last = slots.len().saturating_sub(1);
         for (i, m) in slots.iter().enumerate() {
             // Linear light depth grows away from the light whatever the
@@ -761,19 +785,36 @@ impl Renderer {
             pass.set_scissor_rect(0, 0, w, h);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &self.shadow.bind_group, &[(i as u64 * SHADOW_SLOT_STRIDE) as u32]);
-            pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
-            pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+            triangles += self.draw_scene(&mut pass, &m.clip_from_world, !unclipped);
         }
-        unavailable
+        (unavailable, triangles)
+    }
+
+    /// Draws the scene, less the objects outside the clip volume of
+    /// `clip_from_world` (with `clip_depth: false` for unclipped depth) when
+    /// [`RendererOptions::cull_objects`] is set; returns the triangles drawn.
+    fn draw_scene(&self, pass: &mut wgpu::RenderPass<'_>, clip_from_world: &glam::DMat4, clip_depth: bool) -> u64 {
+        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+        pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        if !self.options.cull_objects {
+            pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+            return u64::from(self.scene.index_count / 3);
+        }
+        let mut ranges = Vec::new();
+        let triangles = culling::visible_ranges(&self.scene.objects, clip_from_world, clip_depth, &mut ranges);
+        for range in ranges {
+            pass.draw_indexed(range, 0, 0..1);
+        }
+        triangles
     }
 
     fn encode_camera_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
         masks: bool,
         timer: Option<&timing::FrameQueries>,
-    ) {
+    ) -> u64 {
         let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
         let bg = self.options.background.as_dvec3();
         let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
@@ -800,14 +841,13 @@ impl Renderer {
         });
         pass.set_pipeline(if masks { &self.passes.color_masks } else { &self.passes.color });
         pass.set_bind_group(0, self.camera_bindings.bind_group.as_ref(), &[]);
-        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
-        pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+        self.draw_scene(&mut pass, &camera.clip_from_world(), true)
     }
 
     fn encode_analysis_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
         staging: &wgpu::Buffer,
         timer: Option<&timing::FrameQueries>,
     ) {
@@ -830,9 +870,7 @@ impl Renderer {
                 }
                 AnalysisSource::Geometry => {
                     pass.set_pipeline(&self.passes.analysis_geometry);
-                    pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
-                    pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+                    self.draw_scene(&mut pass, &camera.clip_from_world(), true);
                 }
             }
         }

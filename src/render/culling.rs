@@ -1,0 +1,151 @@
+//! Per-object culling of the scene passes against a clip volume.
+//!
+//! The rasterizer clips every primitive to the half-spaces `-w <= x <= w`,
+//! `-w <= y <= w` and (unless depth is unclipped) `0 <= z <= w` of clip
+//! space. Each is linear in homogeneous world coordinates, so an object's
+//! bounding box lies outside one exactly when its eight corners do: such an
+//! object cannot produce a fragment and is left out of the draw. Nothing else
+//! is culled, so the output is the same as drawing everything, whatever the
+//! matrix (perspective, orthographic, PSM's inverted lights with `w < 0` for
+//! part of the scene).
+
+use std::ops::Range;
+
+use glam::{DMat4, DVec3, DVec4};
+
+/// One scene object: its index range and bounding-box corners.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct ObjectBounds {
+    pub(crate) indices: Range<u32>,
+    corners: [DVec4; 8],
+}
+
+impl ObjectBounds {
+    /// Bounds of `positions` drawn by `indices`; `None` when there is
+    /// nothing to draw.
+    pub(crate) fn new(indices: Range<u32>, positions: impl IntoIterator<Item = DVec3>) -> Option<Self> {
+        let (lo, hi) =
+            positions.into_iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        if indices.is_empty() || !lo.is_finite() || !hi.is_finite() {
+            return None;
+        }
+        let corner = |i: usize| {
+            DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+            .extend(1.0)
+        };
+        Some(Self { indices, corners: std::array::from_fn(corner) })
+    }
+}
+
+/// Whether no point of the box survives clipping by `clip_from_world`.
+fn outside(corners: &[DVec4; 8], clip_from_world: &DMat4, clip_depth: bool) -> bool {
+    let clip = corners.map(|c| *clip_from_world * c);
+    // The six plane functions; a point is inside where all are >= 0.
+    let planes: [fn(DVec4) -> f64; 6] =
+        [|c| c.w + c.x, |c| c.w - c.x, |c| c.w + c.y, |c| c.w - c.y, |c| c.z, |c| c.w - c.z];
+    let count = if clip_depth { 6 } else { 4 };
+    planes[..count].iter().any(|plane| {
+        clip.iter().all(|&c| {
+            // The GPU evaluates the matrix in f32: cull only what is
+            // outside by more than its rounding.
+            let tolerance = 1e-5 * (c.x.abs() + c.y.abs() + c.z.abs() + c.w.abs());
+            plane(c) < -tolerance
+        })
+    })
+}
+
+/// Fills `out` with the index ranges of the objects that may reach the clip
+/// volume of `clip_from_world` (consecutive ones merged into one draw) and
+/// returns their triangle count. `clip_depth: false` for unclipped depth.
+pub(crate) fn visible_ranges(
+    objects: &[ObjectBounds],
+    clip_from_world: &DMat4,
+    clip_depth: bool,
+    out: &mut Vec<Range<u32>>,
+) -> u64 {
+    out.clear();
+    let mut triangles = 0;
+    for object in objects {
+        if outside(&object.corners, clip_from_world, clip_depth) {
+            continue;
+        }
+        triangles += u64::from(object.indices.len() as u32 / 3);
+        match out.last_mut() {
+            Some(last) if last.end == object.indices.start => last.end = object.indices.end,
+            _ => out.push(object.indices.clone()),
+        }
+    }
+    triangles
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box(at: DVec3, indices: Range<u32>) -> ObjectBounds {
+        ObjectBounds::new(indices, [at - DVec3::splat(0.5), at + DVec3::splat(0.5)]).unwrap()
+    }
+
+    /// A perspective light at the origin looking down -z (wgpu depth 0..1).
+    fn perspective() -> DMat4 {
+        DMat4::perspective_rh(90f64.to_radians(), 1.0, 1.0, 100.0)
+    }
+
+    #[test]
+    fn keeps_what_reaches_the_volume_and_merges_neighbours() {
+        let objects = [
+            unit_box(DVec3::new(0.0, 0.0, -10.0), 0..30),     // inside
+            unit_box(DVec3::new(9.8, 0.0, -10.0), 30..60),    // straddles x = w
+            unit_box(DVec3::new(30.0, 0.0, -10.0), 60..90),   // right of the volume
+            unit_box(DVec3::new(0.0, 0.0, 10.0), 90..120),    // behind the light (w < 0)
+            unit_box(DVec3::new(0.0, 0.0, -200.0), 120..150), // past far
+            unit_box(DVec3::new(0.0, -3.0, -20.0), 150..153), // inside
+        ];
+        let mut ranges = Vec::new();
+        let triangles = visible_ranges(&objects, &perspective(), true, &mut ranges);
+        assert_eq!(ranges, vec![0..60, 150..153]);
+        assert_eq!(triangles, 21);
+        // Unclipped depth keeps what lies past far (and the box behind the
+        // light, which no x/y plane alone rules out, stays culled).
+        visible_ranges(&objects, &perspective(), false, &mut ranges);
+        assert_eq!(ranges, vec![0..60, 120..153]);
+    }
+
+    #[test]
+    fn a_negated_matrix_clips_the_same_points() {
+        // PSM's inverted lights: -M describes the same projective map, but
+        // the rasterizer keeps only points with w > 0 in its clip space.
+        let m = -perspective();
+        let inside_for_m = unit_box(DVec3::new(0.0, 0.0, -10.0), 0..3);
+        let behind = unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6);
+        let mut ranges = Vec::new();
+        visible_ranges(&[inside_for_m, behind], &m, false, &mut ranges);
+        // Under -M the box in front of the light has w < 0 everywhere:
+        // clipped. The one behind has w > 0 and small x, y: drawn (its z
+        // lies past w, so only with unclipped depth).
+        assert_eq!(ranges, vec![3..6]);
+        visible_ranges(&[unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6)], &m, true, &mut ranges);
+        assert!(ranges.is_empty());
+    }
+
+    #[test]
+    fn orthographic_boxes_on_the_boundary_are_kept() {
+        let m = DMat4::orthographic_rh(-1.0, 1.0, -1.0, 1.0, 0.0, 10.0);
+        // Touches x = 1 exactly.
+        let touching = ObjectBounds::new(0..3, [DVec3::new(1.0, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
+        let beyond = ObjectBounds::new(3..6, [DVec3::new(1.01, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
+        let mut ranges = Vec::new();
+        visible_ranges(&[touching, beyond], &m, true, &mut ranges);
+        assert_eq!(ranges, vec![0..3]);
+    }
+
+    #[test]
+    fn empty_objects_are_not_drawn() {
+        assert!(ObjectBounds::new(0..0, [DVec3::ZERO]).is_none());
+        assert!(ObjectBounds::new(0..3, std::iter::empty()).is_none());
+    }
+}

@@ -1,0 +1,74 @@
+//! Per-object culling leaves the output unchanged: the same shadow maps,
+//! camera image and masks as drawing every object, for every classical
+//! method (PSM's inverted and unclipped lights included), while it does
+//! leave objects out.
+
+#![cfg(feature = "render")]
+
+mod render_common;
+
+use glam::{DVec3, UVec2};
+use lixel::render::{Frame, Renderer, RendererOptions};
+use lixel::{Camera, Light, Parameterization, ShadowMapSize, ShadowProblem};
+use render_common::*;
+
+#[test]
+fn culling_changes_nothing_but_the_work() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let total = scene.triangle_count() as u64;
+    // Inside the scene, looking past some objects and away from others.
+    let camera = Camera::look_at(
+        DVec3::new(-2.0, 3.0, 4.0),
+        DVec3::new(12.0, 0.5, -10.0),
+        DVec3::Y,
+        50f64.to_radians(),
+        UVec2::splat(96),
+        0.3,
+        150.0,
+    )
+    .unwrap();
+    let lights = [
+        Light::directional(DVec3::new(0.6, -1.0, 0.35)),
+        Light::point(DVec3::new(-8.0, 30.0, 12.0)),
+        // Behind the viewer and low: PSM inverts this light.
+        Light::point(DVec3::new(-20.0, 6.0, 25.0)),
+        Light::spot(DVec3::new(6.0, 15.0, -4.0), DVec3::new(0.2, -1.0, -0.1), 12f64.to_radians()),
+    ];
+    let mut culled = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let options = RendererOptions { cull_objects: false, ..RendererOptions::default() };
+    let mut everything = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let (mut compared, mut saved_shadow, mut saved_camera) = (0, false, false);
+    for parameterization in Parameterization::ALL_DEFAULT {
+        let matrices: Vec<_> = lights
+            .iter()
+            .filter_map(|&light| {
+                ShadowProblem::new(camera, light, scene.bounds(), ShadowMapSize::square(256))
+                    .and_then(|p| p.solve(&parameterization))
+                    .ok()
+            })
+            .collect();
+        let frame = Frame { camera: &camera, lights: &matrices, masks: true, analysis: None };
+        let a = culled.render(&frame).unwrap();
+        let b = everything.render(&frame).unwrap();
+        assert_eq!(b.shadow_triangles, total * matrices.len() as u64);
+        assert!(a.shadow_triangles <= b.shadow_triangles && a.camera_triangles <= b.camera_triangles);
+        eprintln!(
+            "{parameterization:?}: shadow triangles {} of {}, camera {} of {}",
+            a.shadow_triangles, b.shadow_triangles, a.camera_triangles, b.camera_triangles
+        );
+        saved_shadow |= a.shadow_triangles < b.shadow_triangles;
+        saved_camera |= a.camera_triangles < b.camera_triangles;
+        for light in 0..matrices.len() {
+            let (ma, mb) = (culled.read_shadow_map(light).unwrap(), everything.read_shadow_map(light).unwrap());
+            let differing = ma.depth.iter().zip(&mb.depth).filter(|(x, y)| x != y).count();
+            assert_eq!(differing, 0, "{parameterization:?} light {light}: shadow maps differ");
+        }
+        assert_eq!(culled.read_color().unwrap(), everything.read_color().unwrap(), "{parameterization:?}");
+        assert_eq!(culled.read_masks().unwrap(), everything.read_masks().unwrap(), "{parameterization:?}");
+        compared += matrices.len();
+    }
+    assert!(compared >= 16, "most configurations solve: {compared}");
+    assert!(saved_shadow, "some shadow pass left objects out");
+    assert!(saved_camera, "the camera pass left objects out");
+}
