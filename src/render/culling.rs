@@ -90,9 +90,12 @@ mod tests {
         ObjectBounds::new(indices, [at - DVec3::splat(0.5), at + DVec3::splat(0.5)]).unwrap()
     }
 
-    /// A perspective light at the origin looking down -z (wgpu depth 0..1).
+    /// A perspective light at the origin looking down -z: 90° field of
+    /// view, near 1, far 100, wgpu depth 0..1 (`w = -z`).
     fn perspective() -> DMat4 {
-        DMat4::perspective_rh(90f64.to_radians(), 1.0, 1.0, 100.0)
+        let (near, far) = (1.0, 100.0);
+        let a = far / (near - far);
+        DMat4::from_cols(DVec4::X, DVec4::Y, DVec4::new(0.0, 0.0, a, -1.0), DVec4::new(0.0, 0.0, a * near, 0.0))
     }
 
     #[test]
@@ -134,7 +137,8 @@ mod tests {
 
     #[test]
     fn orthographic_boxes_on_the_boundary_are_kept() {
-        let m = DMat4::orthographic_rh(-1.0, 1.0, -1.0, 1.0, 0.0, 10.0);
+        // x, y in [-1, 1], depth 0..1 for z from 0 to -10.
+        let m = DMat4::from_cols(DVec4::X, DVec4::Y, DVec4::new(0.0, 0.0, -0.1, 0.0), DVec4::W);
         // Touches x = 1 exactly.
         let touching = ObjectBounds::new(0..3, [DVec3::new(1.0, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
         let beyond = ObjectBounds::new(3..6, [DVec3::new(1.01, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
