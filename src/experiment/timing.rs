@@ -246,8 +246,6 @@ struct Run {
     cpu: Vec<Option<Duration>>,
     /// Sums over the timed blocks.
     sums: StageSums,
-    /// Sums of the last block.
-    last_sums: StageSums,
 }
 
 impl Run {
@@ -262,7 +260,6 @@ impl Run {
             timed: Vec::new(),
             cpu: Vec::new(),
             sums: StageSums::default(),
-            last_sums: StageSums::default(),
         })
     }
 
@@ -279,14 +276,17 @@ impl Run {
         Ok(optimized)
     }
 
-    /// Renders `frames` frames from an idle device to an idle device and
-    /// returns the wall time and the process's CPU time.
+    /// Renders `frames` frames from an idle device to an idle device; a
+    /// `timed` block records its wall time, the process's CPU time, its
+    /// stage sums and its counts (a warm-up block only advances the walk and
+    /// the optimizer).
     fn block(
         &mut self,
         renderer: &mut Renderer,
         cell: &Cell<'_>,
         frames: usize,
-    ) -> Result<(Duration, Option<Duration>), ExperimentError> {
+        timed: bool,
+    ) -> Result<(), ExperimentError> {
         renderer.wait_idle()?;
         let cpu_start = process_cpu_time();
         let start = Instant::now();
@@ -359,10 +359,14 @@ impl Run {
         while let Some(times) = renderer.try_take_gpu_times() {
             sums.add_gpu(&times);
         }
-        self.optimizations += optimizations;
-        self.analyses += analyses;
-        self.last_sums = sums;
-        Ok((elapsed, cpu))
+        if timed {
+            self.timed.push(elapsed);
+            self.cpu.push(cpu);
+            self.sums.merge(&sums);
+            self.optimizations += optimizations;
+            self.analyses += analyses;
+        }
+        Ok(())
     }
 }
 
@@ -453,19 +457,13 @@ pub fn run_timing(
                 .collect::<Result<Vec<_>, _>>()?;
             for run in &mut runs {
                 for _ in 0..options.warmup_blocks {
-                    run.block(&mut renderer, &cell, block)?;
+                    run.block(&mut renderer, &cell, block, false)?;
                 }
-                run.optimizations = 0;
-                run.analyses = 0;
             }
             for round in 0..rounds {
                 let pipelines = runs.len();
                 for k in 0..pipelines {
-                    let run = &mut runs[(round + k) % pipelines];
-                    let (elapsed, cpu) = run.block(&mut renderer, &cell, block)?;
-                    run.timed.push(elapsed);
-                    run.cpu.push(cpu);
-                    run.sums.merge(&run.last_sums);
+                    runs[(round + k) % pipelines].block(&mut renderer, &cell, block, true)?;
                 }
             }
             let frames = (rounds * block) as u32;

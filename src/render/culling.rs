@@ -58,28 +58,18 @@ fn outside(corners: &[DVec4; 8], clip_from_world: &DMat4, clip_depth: bool) -> b
     })
 }
 
-/// Fills `out` with the index ranges of the objects that may reach the clip
-/// volume of `clip_from_world` (consecutive ones merged into one draw) and
-/// returns their triangle count. `clip_depth: false` for unclipped depth.
-pub(crate) fn visible_ranges(
-    objects: &[ObjectBounds],
-    clip_from_world: &DMat4,
-    clip_depth: bool,
-    out: &mut Vec<Range<u32>>,
-) -> u64 {
-    out.clear();
-    let mut triangles = 0;
-    for object in objects {
-        if outside(&object.corners, clip_from_world, clip_depth) {
-            continue;
-        }
-        triangles += u64::from(object.indices.len() as u32 / 3);
-        match out.last_mut() {
+/// The index ranges of the objects that may reach the clip volume of
+/// `clip_from_world`, consecutive ones merged into one draw. `clip_depth:
+/// false` for unclipped depth.
+pub(crate) fn visible_ranges(objects: &[ObjectBounds], clip_from_world: &DMat4, clip_depth: bool) -> Vec<Range<u32>> {
+    let mut ranges: Vec<Range<u32>> = Vec::new();
+    for object in objects.iter().filter(|o| !outside(&o.corners, clip_from_world, clip_depth)) {
+        match ranges.last_mut() {
             Some(last) if last.end == object.indices.start => last.end = object.indices.end,
-            _ => out.push(object.indices.clone()),
+            _ => ranges.push(object.indices.clone()),
         }
     }
-    triangles
+    ranges
 }
 
 #[cfg(test)]
@@ -108,14 +98,10 @@ mod tests {
             unit_box(DVec3::new(0.0, 0.0, -200.0), 120..150), // past far
             unit_box(DVec3::new(0.0, -3.0, -20.0), 150..153), // inside
         ];
-        let mut ranges = Vec::new();
-        let triangles = visible_ranges(&objects, &perspective(), true, &mut ranges);
-        assert_eq!(ranges, vec![0..60, 150..153]);
-        assert_eq!(triangles, 21);
-        // Unclipped depth keeps what lies past far (and the box behind the
-        // light, which no x/y plane alone rules out, stays culled).
-        visible_ranges(&objects, &perspective(), false, &mut ranges);
-        assert_eq!(ranges, vec![0..60, 120..153]);
+        assert_eq!(visible_ranges(&objects, &perspective(), true), vec![0..60, 150..153]);
+        // Unclipped depth keeps what lies past far; the box behind the light
+        // stays culled (w + x < 0 at all its corners).
+        assert_eq!(visible_ranges(&objects, &perspective(), false), vec![0..60, 120..153]);
     }
 
     #[test]
@@ -125,14 +111,12 @@ mod tests {
         let m = -perspective();
         let inside_for_m = unit_box(DVec3::new(0.0, 0.0, -10.0), 0..3);
         let behind = unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6);
-        let mut ranges = Vec::new();
-        visible_ranges(&[inside_for_m, behind], &m, false, &mut ranges);
+        let ranges = visible_ranges(&[inside_for_m, behind], &m, false);
         // Under -M the box in front of the light has w < 0 everywhere:
         // clipped. The one behind has w > 0 and small x, y: drawn (its z
         // lies past w, so only with unclipped depth).
         assert_eq!(ranges, vec![3..6]);
-        visible_ranges(&[unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6)], &m, true, &mut ranges);
-        assert!(ranges.is_empty());
+        assert!(visible_ranges(&[unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6)], &m, true).is_empty());
     }
 
     #[test]
@@ -142,9 +126,7 @@ mod tests {
         // Touches x = 1 exactly.
         let touching = ObjectBounds::new(0..3, [DVec3::new(1.0, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
         let beyond = ObjectBounds::new(3..6, [DVec3::new(1.01, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
-        let mut ranges = Vec::new();
-        visible_ranges(&[touching, beyond], &m, true, &mut ranges);
-        assert_eq!(ranges, vec![0..3]);
+        assert_eq!(visible_ranges(&[touching, beyond], &m, true), vec![0..3]);
     }
 
     #[test]

@@ -800,9 +800,9 @@ impl Renderer {
             pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
             return u64::from(self.scene.index_count / 3);
         }
-        let mut ranges = Vec::new();
-        let triangles = culling::visible_ranges(&self.scene.objects, clip_from_world, clip_depth, &mut ranges);
-        for range in ranges {
+        let mut triangles = 0;
+        for range in culling::visible_ranges(&self.scene.objects, clip_from_world, clip_depth) {
+            triangles += u64::from(range.len() as u32 / 3);
             pass.draw_indexed(range, 0, 0..1);
         }
         triangles
