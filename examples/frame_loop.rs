@@ -70,6 +70,12 @@ fn run() -> Result<(), String> {
         "mean GPU time           {} ms",
         show(mean(&|r| r.gpu.and_then(|g| g.total).map(|d| d.as_secs_f64() * 1e3)))
     );
+    let triangles = renderer.triangle_count() as f64;
+    println!(
+        "shadow triangles drawn  {}% of passes x scene (per-object culling)",
+        show(mean(&|r| (r.shadow_passes > 0)
+            .then(|| 100.0 * r.shadow_triangles as f64 / (f64::from(r.shadow_passes) * triangles))))
+    );
     println!(
         "readback latency        {} frames, {} ms (ready), {} ms (taken)",
         show(mean(&|r| r.readback.map(|x| x.1 as f64))),

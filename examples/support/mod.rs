@@ -201,10 +201,13 @@ pub struct FrameRecord {
     /// The analysis readback consumed this frame: (its frame, latency frames, ready ms, taken ms).
     pub readback: Option<(u64, u64, f64, f64)>,
     pub matrices_updated: usize,
+    /// Shadow passes and the triangles they drew after per-object culling.
+    pub shadow_passes: u32,
+    pub shadow_triangles: u64,
 }
 
 impl FrameRecord {
-    pub const CSV_HEADER: &'static str = "frame,wall_ms,solve_ms,encode_ms,gpu_shadow_ms,gpu_camera_ms,gpu_analysis_ms,gpu_total_ms,analysis_queued,analysis_skipped,readback_frame,latency_frames,latency_ready_ms,latency_taken_ms,matrices_updated";
+    pub const CSV_HEADER: &'static str = "frame,wall_ms,solve_ms,encode_ms,gpu_shadow_ms,gpu_camera_ms,gpu_analysis_ms,gpu_total_ms,analysis_queued,analysis_skipped,readback_frame,latency_frames,latency_ready_ms,latency_taken_ms,matrices_updated,shadow_passes,shadow_triangles";
 
     pub fn csv_row(&self) -> String {
         let ms = |d: Option<std::time::Duration>| d.map_or(String::new(), |d| format!("{:.3}", d.as_secs_f64() * 1e3));
@@ -214,7 +217,7 @@ impl FrameRecord {
                 (r.0.to_string(), r.1.to_string(), format!("{:.3}", r.2), format!("{:.3}", r.3))
             });
         format!(
-            "{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.wall_ms,
             self.solve_ms,
@@ -229,7 +232,9 @@ impl FrameRecord {
             lat_frames,
             ready,
             taken,
-            self.matrices_updated
+            self.matrices_updated,
+            self.shadow_passes,
+            self.shadow_triangles
         )
     }
 }
@@ -333,6 +338,8 @@ pub fn run_loop(
         record.encode_ms = report.cpu_time.as_secs_f64() * 1e3;
         record.analysis_queued = report.analysis_queued;
         record.analysis_skipped = report.analysis_skipped;
+        record.shadow_passes = report.shadow_passes;
+        record.shadow_triangles = report.shadow_triangles;
         submissions.push_back(report.submission);
 
         if let Some((every, dir)) = &config.png {
