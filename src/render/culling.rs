@@ -58,9 +58,14 @@ fn outside(corners: &[DVec4; 8], clip_from_world: &DMat4, clip_depth: bool) -> b
     })
 }
 
+/// Most draws one pass issues: a scene of many small objects would
+/// otherwise cost more in draw calls than culling saves.
+pub(crate) const MAX_DRAWS: usize = 256;
+
 /// The index ranges of the objects that may reach the clip volume of
-/// `clip_from_world`, consecutive ones merged into one draw. `clip_depth:
-/// false` for unclipped depth.
+/// `clip_from_world`, consecutive ones merged into one draw, at most
+/// [`MAX_DRAWS`] of them (see [`limit_draws`]). `clip_depth: false` for
+/// unclipped depth.
 pub(crate) fn visible_ranges(objects: &[ObjectBounds], clip_from_world: &DMat4, clip_depth: bool) -> Vec<Range<u32>> {
     let mut ranges: Vec<Range<u32>> = Vec::new();
     for object in objects.iter().filter(|o| !outside(&o.corners, clip_from_world, clip_depth)) {
@@ -69,7 +74,34 @@ pub(crate) fn visible_ranges(objects: &[ObjectBounds], clip_from_world: &DMat4, 
             _ => ranges.push(object.indices.clone()),
         }
     }
-    ranges
+    limit_draws(ranges, MAX_DRAWS)
+}
+
+/// Merges sorted, disjoint `ranges` across their smallest gaps until at
+/// most `max` remain. What a merge adds back was culled, so it is drawn but
+/// clipped: the output does not change.
+fn limit_draws(ranges: Vec<Range<u32>>, max: usize) -> Vec<Range<u32>> {
+    if ranges.len() <= max.max(1) {
+        return ranges;
+    }
+    // Gap i lies between ranges i and i + 1; close the smallest ones.
+    let mut gaps: Vec<(u32, usize)> = ranges.windows(2).enumerate().map(|(i, w)| (w[1].start - w[0].end, i)).collect();
+    let close = ranges.len() - max.max(1);
+    gaps.select_nth_unstable(close - 1);
+    let mut closed = vec![false; ranges.len()];
+    for &(_, i) in &gaps[..close] {
+        closed[i] = true;
+    }
+    let mut merged: Vec<Range<u32>> = Vec::with_capacity(max);
+    let mut joining = false;
+    for (range, &join_next) in ranges.into_iter().zip(&closed) {
+        match merged.last_mut() {
+            Some(last) if joining => last.end = range.end,
+            _ => merged.push(range),
+        }
+        joining = join_next;
+    }
+    merged
 }
 
 #[cfg(test)]
@@ -127,6 +159,23 @@ mod tests {
         let touching = ObjectBounds::new(0..3, [DVec3::new(1.0, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
         let beyond = ObjectBounds::new(3..6, [DVec3::new(1.01, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
         assert_eq!(visible_ranges(&[touching, beyond], &m, true), vec![0..3]);
+    }
+
+    #[test]
+    fn many_ranges_merge_across_the_smallest_gaps() {
+        // Ranges of 3 indices with gaps 3, 30, 6, 300.
+        let ranges = vec![0..3, 6..9, 39..42, 48..51, 351..354];
+        assert_eq!(limit_draws(ranges.clone(), 5), ranges);
+        assert_eq!(limit_draws(ranges.clone(), 4), vec![0..9, 39..42, 48..51, 351..354]);
+        assert_eq!(limit_draws(ranges.clone(), 3), vec![0..9, 39..51, 351..354]);
+        assert_eq!(limit_draws(ranges.clone(), 2), vec![0..51, 351..354]);
+        assert_eq!(limit_draws(ranges.clone(), 1), vec![0..354]);
+        // Everything visible stays covered, whatever the limit.
+        let many: Vec<_> = (0..10_000u32).map(|i| 9 * i..9 * i + 3 + 3 * (i % 2)).collect();
+        let limited = limit_draws(many.clone(), MAX_DRAWS);
+        assert_eq!(limited.len(), MAX_DRAWS);
+        assert!(many.iter().all(|r| limited.iter().any(|l| l.start <= r.start && r.end <= l.end)));
+        assert!(limited.windows(2).all(|w| w[0].end < w[1].start));
     }
 
     #[test]
