@@ -39,6 +39,18 @@ fn timing_runs_every_pipeline_in_paired_rounds() {
     assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 3 | 128²")).count(), 2 + 8);
     assert!(md.contains("scene-optimized / focused: cells median"));
     assert!(md.contains("over 4 paired rounds"));
+    assert!(!md.contains("GPU shadow"), "no GPU columns without GPU stages");
+
+    // With timestamps (where the device has them) the breakdown gets GPU stages.
+    if device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+        let options = TimingOptions { lights: vec![2], gpu_stages: true, ..options };
+        let rows = experiment::run_timing(&config, &options, &device, &queue, |_| {}).unwrap();
+        for stage in &rows[0].stages {
+            assert!(stage.gpu_frames > 0 && stage.shadow.is_some() && stage.camera.is_some(), "{stage:?}");
+        }
+        assert!(rows[0].stages[0].analysis.unwrap().is_zero() && !rows[0].stages[2].analysis.unwrap().is_zero());
+        assert!(experiment::timing_markdown(&rows).contains("GPU shadow"));
+    }
 }
 
 #[test]

@@ -556,31 +556,44 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
 
 /// Where each pipeline's frame time went, one row per cell and pipeline.
 fn stages_markdown(rows: &[TimingRow]) -> String {
+    let with_gpu = rows.iter().flat_map(|r| &r.stages).any(|s| s.gpu_frames > 0);
     let mut md = String::from(
-        "\nWhere the time went, ms per frame (GPU stages from timestamp queries on the frames whose stamps came back, \
-         `--timing-gpu-stages` only; CPU optimization and solving on the frame loop's thread and the process's CPU time, \
-         all threads, averaged over every frame):\n\n\
-         | lights | map | pipeline | frame | GPU shadow | GPU camera | GPU analysis | CPU optimize | CPU solve | GPU frames | CPU time (all threads) |\n\
-         |---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "\nWhere the time went, ms per frame: the loop thread's CPU time turning readbacks into samples and \
+         optimizing, and solving matrices; the process's CPU time (all threads, lavapipe's included)",
     );
+    md.push_str(if with_gpu {
+        "; GPU time per stage from timestamp queries, on the frames whose stamps came back.\n\n\
+         | lights | map | pipeline | frame | CPU optimize | CPU solve | CPU time (all threads) | GPU shadow | GPU camera | GPU analysis | GPU frames |\n\
+         |---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    } else {
+        " (`--timing-gpu-stages` adds GPU time per stage).\n\n\
+         | lights | map | pipeline | frame | CPU optimize | CPU solve | CPU time (all threads) |\n\
+         |---:|---:|---|---:|---:|---:|---:|\n"
+    });
     let ms = |d: Duration| format!("{:.1}", d.as_secs_f64() * 1e3);
-    let gpu = |d: Option<Duration>| d.map_or_else(|| "-".to_owned(), ms);
+    let or_dash = |d: Option<Duration>| d.map_or_else(|| "-".to_owned(), ms);
     for r in rows {
         let frames = [r.focused, r.lispsm, r.optimized, r.focused_with_analysis];
         for (((name, frame), stage), cpu) in PIPELINES.iter().zip(frames).zip(&r.stages).zip(r.cpu) {
             md.push_str(&format!(
-                "| {} | {}² | {name} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {}² | {name} | {} | {} | {} | {} |",
                 r.lights,
                 r.map,
                 ms(frame),
-                gpu(stage.shadow),
-                gpu(stage.camera),
-                gpu(stage.analysis),
                 ms(stage.optimize),
                 ms(stage.solve),
-                stage.gpu_frames,
-                gpu(cpu)
+                or_dash(cpu)
             ));
+            if with_gpu {
+                md.push_str(&format!(
+                    " {} | {} | {} | {} |",
+                    or_dash(stage.shadow),
+                    or_dash(stage.camera),
+                    or_dash(stage.analysis),
+                    stage.gpu_frames
+                ));
+            }
+            md.push('\n');
         }
     }
     md
