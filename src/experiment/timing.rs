@@ -164,10 +164,23 @@ impl StageSums {
 }
 
 impl TimingRow {
+    /// Mean frame time per pipeline, in the order of [`PIPELINES`].
+    #[must_use]
+    pub fn frame_times(&self) -> [Duration; 4] {
+        [self.focused, self.lispsm, self.optimized, self.focused_with_analysis]
+    }
+
+    /// Mean frame time of pipeline `k` ([`PIPELINES`]) over focused's.
+    #[must_use]
+    pub fn ratio(&self, k: usize) -> f64 {
+        let times = self.frame_times();
+        times[k].as_secs_f64() / times[0].as_secs_f64()
+    }
+
     /// Mean optimized / focused frame time.
     #[must_use]
     pub fn optimized_ratio(&self) -> f64 {
-        self.optimized.as_secs_f64() / self.focused.as_secs_f64()
+        self.ratio(2)
     }
 
     /// Per-round ratios of pipeline `k` ([`PIPELINES`]) to focused.
@@ -185,7 +198,7 @@ impl TimingRow {
     /// Mean (focused + analysis) / focused frame time.
     #[must_use]
     pub fn analysis_ratio(&self) -> f64 {
-        self.focused_with_analysis.as_secs_f64() / self.focused.as_secs_f64()
+        self.ratio(3)
     }
 }
 
@@ -512,7 +525,7 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
             ms(r.lispsm),
             ms(r.optimized),
             ms(r.focused_with_analysis),
-            ms(r.lispsm) / ms(r.focused),
+            r.ratio(1),
             r.optimized_ratio(),
             r.analysis_ratio(),
             r.analyses,
@@ -528,12 +541,7 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
     );
     for (k, what) in [(2, "scene-optimized / focused"), (3, "(focused + analysis) / focused"), (1, "LiSPSM / focused")]
     {
-        let mut cells: Vec<f64> = rows
-            .iter()
-            .map(|r| {
-                r.blocks[k].iter().sum::<Duration>().as_secs_f64() / r.blocks[0].iter().sum::<Duration>().as_secs_f64()
-            })
-            .collect();
+        let mut cells: Vec<f64> = rows.iter().map(|r| r.ratio(k)).collect();
         let largest = cells.iter().copied().fold(0.0f64, f64::max);
         let all: Vec<f64> = rows.iter().flat_map(|r| r.round_ratios(k)).collect();
         let pooled = RatioEstimate::from_ratios(&all)
@@ -573,8 +581,7 @@ fn stages_markdown(rows: &[TimingRow]) -> String {
     let ms = |d: Duration| format!("{:.1}", d.as_secs_f64() * 1e3);
     let or_dash = |d: Option<Duration>| d.map_or_else(|| "-".to_owned(), ms);
     for r in rows {
-        let frames = [r.focused, r.lispsm, r.optimized, r.focused_with_analysis];
-        for (((name, frame), stage), cpu) in PIPELINES.iter().zip(frames).zip(&r.stages).zip(r.cpu) {
+        for (((name, frame), stage), cpu) in PIPELINES.iter().zip(r.frame_times()).zip(&r.stages).zip(r.cpu) {
             md.push_str(&format!(
                 "| {} | {}² | {name} | {} | {} | {} | {} |",
                 r.lights,
