@@ -28,6 +28,18 @@ pub enum LixelError {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// A finite input coordinate lies beyond the supported range
+    /// `|x| <= MAX_COORDINATE` ([`crate::MAX_COORDINATE`], `1e15`): squares
+    /// of such values overflow or swamp the scene in rounding error.
+    #[error("{what} has a coordinate of magnitude {magnitude:e}, beyond the supported {limit:e}")]
+    OutOfRange {
+        /// Which input held the value.
+        what: &'static str,
+        /// Its largest absolute coordinate.
+        magnitude: f64,
+        /// The supported limit.
+        limit: f64,
+    },
     /// Scene bounds are empty or inverted.
     #[error("invalid scene bounds: {reason}")]
     InvalidBounds {
@@ -89,6 +101,17 @@ pub enum LixelError {
 
 /// Result alias used throughout the crate.
 pub type Result<T, E = LixelError> = std::result::Result<T, E>;
+
+/// Returns `Err(OutOfRange)` when a coordinate's magnitude exceeds
+/// [`crate::MAX_COORDINATE`] (after [`check_finite`]).
+pub(crate) fn check_range(values: &[f64], what: &'static str) -> Result<()> {
+    let magnitude = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if magnitude <= crate::tolerance::MAX_COORDINATE {
+        Ok(())
+    } else {
+        Err(LixelError::OutOfRange { what, magnitude, limit: crate::tolerance::MAX_COORDINATE })
+    }
+}
 
 /// Returns `Err(NonFinite)` unless every component is finite.
 pub(crate) fn check_finite(values: &[f64], what: &'static str) -> Result<()> {

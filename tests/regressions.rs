@@ -106,3 +106,246 @@ fn nothing_visible_with_light_inside_receivers_is_its_own_error() {
         );
     }
 }
+
+// ---- Issue 10: an independent contract checker's findings, one test each. ----
+
+fn room_camera() -> Camera {
+    Camera::look_at(DVec3::new(0.0, 1.7, 10.0), DVec3::ZERO, DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.1, 100.0)
+        .unwrap()
+}
+
+fn room() -> Aabb {
+    Aabb::from_corners(DVec3::new(-10.0, 0.0, -10.0), DVec3::new(10.0, 3.0, 10.0))
+}
+
+/// Every point of a grid over `r` that the camera sees and the light reaches,
+/// plus the solver's own visible receiver body (away from the light itself).
+fn visible_lit_points(problem: &ShadowProblem) -> Vec<DVec3> {
+    let r = problem.bounds().receivers;
+    let clip = problem.camera().clip_from_world();
+    let mut points = Vec::new();
+    let n = 12;
+    for i in 0..=n {
+        for j in 0..=n {
+            for k in 0..=n {
+                let t = DVec3::new(f64::from(i), f64::from(j), f64::from(k)) / f64::from(n);
+                let p = r.min + (r.max - r.min) * t;
+                let c = clip * p.extend(1.0);
+                let seen = c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w && c.z >= 0.0 && c.z <= c.w;
+                let at_light = problem.light().position().is_some_and(|l| (p - l).length() < 1e-6);
+                if seen && problem.light().reaches(p) && !at_light {
+                    points.push(p);
+                }
+            }
+        }
+    }
+    points
+}
+
+fn assert_covers_all(m: &lixel::LightMatrix, points: &[DVec3], what: &str) {
+    assert!(m.clip_from_world.is_finite(), "{what}: non-finite matrix");
+    for &p in points {
+        assert!(m.covers(p, 1e-6), "{what}: {p} outside the map ({:?})", m.project(p));
+        let z = m.project(p).unwrap().z;
+        assert!(z <= 1.0 + 1e-6 && (z >= -1e-6 || m.needs_unclipped_depth), "{what}: {p} at depth {z}");
+    }
+}
+
+/// Issue 10 case 1: a ceiling spot inside the receiver bounds (the commonest
+/// indoor light) was refused with `LightInsideFocus` by every method but PSM.
+/// A spot under 89° always fits its own frustum.
+#[test]
+fn ceiling_spot_inside_the_room_is_served_by_every_method() {
+    for y in [2.9, 3.0, 3.1] {
+        let spot = Light::spot(DVec3::new(0.0, y, 0.0), DVec3::NEG_Y, 30f64.to_radians());
+        let problem =
+            ShadowProblem::new(room_camera(), spot, SceneBounds::uniform(room()), ShadowMapSize::square(1024)).unwrap();
+        let points = visible_lit_points(&problem);
+        assert!(points.len() > 8, "{} points", points.len());
+        for p in Parameterization::ALL_DEFAULT {
+            let m = problem.solve(&p).unwrap_or_else(|e| panic!("y = {y}, {:?}: {e}", p.method()));
+            assert_covers_all(&m, &points, &format!("y = {y}, {:?}", p.method()));
+        }
+        // The scene optimizer, from the same points as samples.
+        let boundary: Vec<(DVec3, DVec3)> = points.iter().map(|&p| (p, DVec3::Y)).collect();
+        let samples = lixel::Samples::from_points(&problem, &points, &boundary);
+        let m = lixel::optimize_light_matrix(&samples, None).unwrap().matrix;
+        assert_covers_all(&m, &points, &format!("y = {y}, optimized"));
+    }
+    // A point light at the same place is still inside R: that needs a cube map.
+    let point = Light::point(DVec3::new(0.0, 2.9, 0.0));
+    let problem =
+        ShadowProblem::new(room_camera(), point, SceneBounds::uniform(room()), ShadowMapSize::square(1024)).unwrap();
+    assert!(matches!(problem.solve(&Parameterization::Normal), Err(LixelError::LightInsideFocus { .. })));
+}
+
+/// Issue 10 case 2: point and spot lights 1e5..1e9 away are suns written as
+/// points. LiSPSM reported `NotInFront`, PSM `PsmHullAroundLight` and
+/// plane-optimal `PlaneDegenerate` where the directional light they approach
+/// has no fallback at all.
+#[test]
+fn far_point_and_spot_lights_behave_like_the_sun_they_approach() {
+    let dir = DVec3::new(1.0, 2.0, 0.5).normalize();
+    let sun = ShadowProblem::new(
+        room_camera(),
+        Light::directional(-dir),
+        SceneBounds::uniform(room()),
+        ShadowMapSize::square(1024),
+    )
+    .unwrap();
+    for distance in [1e5, 1e6, 1e7, 1e8, 1e9] {
+        for light in [Light::point(dir * distance), Light::spot(dir * distance, -dir, 10f64.to_radians())] {
+            let problem =
+                ShadowProblem::new(room_camera(), light, SceneBounds::uniform(room()), ShadowMapSize::square(1024))
+                    .unwrap();
+            let points = visible_lit_points(&problem);
+            for p in Parameterization::ALL_DEFAULT {
+                let what = format!("{light:?} {:?}", p.method());
+                let m = problem.solve(&p).unwrap_or_else(|e| panic!("{what}: {e}"));
+                let m_sun = sun.solve(&p).unwrap();
+                assert_eq!(m.fallback.is_some(), m_sun.fallback.is_some(), "{what}: {:?} vs the sun's {:?}", m.fallback, m_sun.fallback);
+                assert_covers_all(&m, &points, &what);
+            }
+        }
+    }
+}
+
+/// Issue 10 case 3: a light in (or grazing) the plane of a flat receiver: the
+/// casters between the visible floor and the light fell outside the depth
+/// range (−1.28e3) while `needs_unclipped_depth` was false. A sunset.
+#[test]
+fn casters_at_grazing_light_stay_in_the_depth_range() {
+    let receivers = Aabb::from_corners(DVec3::new(-50.0, 0.0, -50.0), DVec3::new(50.0, 0.0, 50.0));
+    let casters = Aabb::from_corners(DVec3::new(-50.0, 0.0, -50.0), DVec3::new(50.0, 20.0, 50.0));
+    let cameras = [
+        Camera::look_at(DVec3::new(0.0, 0.0, 40.0), DVec3::new(5.0, 0.0, 0.0), DVec3::Y, 60f64.to_radians(), UVec2::new(370, 737), 0.03, 0.07).unwrap(),
+        Camera::look_at(DVec3::new(0.0, 5.0, 60.0), DVec3::ZERO, DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.1, 200.0).unwrap(),
+    ];
+    for camera in cameras {
+        for h in [0.0, 1e-6, 1e-4, 1e-2] {
+            let light = Light::point(DVec3::new(-300.0, h, 10.0));
+            let problem =
+                ShadowProblem::new(camera, light, SceneBounds { casters, receivers }, ShadowMapSize::square(1024))
+                    .unwrap();
+            let floor = problem.visible_receiver_body();
+            for p in Parameterization::ALL_DEFAULT {
+                let what = format!("h = {h}, {:?}", p.method());
+                let m = problem.solve(&p).unwrap_or_else(|e| panic!("{what}: {e}"));
+                for &v in floor.vertices() {
+                    let zv = m.project(v).unwrap().z;
+                    for t in [1e-3, 0.01, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99] {
+                        let q = light.position().unwrap() + (v - light.position().unwrap()) * t;
+                        if !casters.contains(q) {
+                            continue;
+                        }
+                        let z = m.project(q).map_or(f64::NAN, |n| n.z);
+                        assert!(z <= zv + 1e-9 && (z >= -1e-6 || m.needs_unclipped_depth), "{what}: caster {q} at depth {z} (receiver {zv})");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Issue 10 case 4: an empty visible receiver body and samples that all share
+/// one light depth gave `alpha = inf` in the depth row.
+#[test]
+fn optimizer_with_empty_view_body_and_one_depth_is_finite() {
+    let camera = Camera::look_at(DVec3::new(0.0, 10.0, 20.0), DVec3::new(0.0, 5.0, 0.0), DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.1, 100.0).unwrap();
+    let unseen = Aabb::from_corners(DVec3::new(-1.0, 0.0, 200.0), DVec3::new(1.0, 1.0, 202.0));
+    let p = ShadowProblem::new(camera, Light::directional(DVec3::NEG_Y), SceneBounds::uniform(unseen), ShadowMapSize::square(1024)).unwrap();
+    let rel = [DVec3::new(0.0, 5.0, 0.0), DVec3::new(1.0, 5.0, 0.0), DVec3::new(0.0, 5.0, 1.0)];
+    let boundary = [(DVec3::new(0.5, 5.0, 0.5), DVec3::Y)];
+    let s = lixel::Samples::from_points(&p, &rel, &boundary);
+    let m = lixel::optimize_light_matrix(&s, None).unwrap().matrix;
+    assert_covers_all(&m, &[rel[0], rel[1], rel[2], boundary[0].0], "optimized");
+}
+
+/// Issue 10 case 5: a boundary sample whose surface is seen edge-on (n·v ≈
+/// 1e-17) has no usable derivative; it must be dropped, not make the
+/// optimizer fail with "relevant samples surround the light".
+#[test]
+fn edge_on_boundary_samples_are_dropped() {
+    let camera = room_camera();
+    let view = camera.view_direction();
+    for light in [Light::directional(DVec3::new(0.3, -1.0, 0.2)), Light::point(DVec3::new(3.0, 20.0, 1.0))] {
+        let p = ShadowProblem::new(camera, light, SceneBounds::uniform(room()), ShadowMapSize::square(1024)).unwrap();
+        let at = DVec3::new(0.5, 0.0, 0.5);
+        // A normal orthogonal to the ray from the eye, up to rounding.
+        let ray = (at - camera.eye()).normalize();
+        let n = ray.cross(view.cross(DVec3::Y)).normalize();
+        let n = (n - ray * n.dot(ray)).normalize();
+        assert!(n.dot(ray).abs() < 1e-15);
+        let good = [(DVec3::new(-1.0, 0.0, 0.0), DVec3::Y), (DVec3::new(1.0, 0.0, -1.0), DVec3::Y)];
+        let boundary = [good[0], (at, n), good[1]];
+        let s = lixel::Samples::from_points(&p, &[], &boundary);
+        assert_eq!(s.boundary().len(), 2, "{light:?}");
+        let m = lixel::optimize_light_matrix(&s, None).unwrap_or_else(|e| panic!("{light:?}: {e}")).matrix;
+        assert_covers_all(&m, &[at, good[0].0, good[1].0], "optimized");
+    }
+}
+
+/// Issue 10 case 6: with a single boundary sample and a previous matrix whose
+/// axis sees it at a grazing angle, the re-fitted previous map lost the sample
+/// to rounding (NDC x = 93.5). The optimizer now checks its answer.
+#[test]
+fn optimizer_map_holds_its_samples_with_any_prev() {
+    let camera = room_camera();
+    let light = Light::point(DVec3::new(-8.0, 12.0, -9.0));
+    let p = ShadowProblem::new(camera, light, SceneBounds::uniform(room()), ShadowMapSize::new(1024, 7)).unwrap();
+    let at = DVec3::new(2.0, 0.0, 1.0);
+    let s = lixel::Samples::from_points(&p, &[], &[(at, DVec3::Y)]);
+    let frame = *s.frame();
+    let x = frame.homogeneous(at).normalize();
+    // Previous matrices whose optical axes see the sample ever more obliquely.
+    let (e1, _) = x.any_orthonormal_pair();
+    for cos in [0.5, 1e-3, 1e-6, 1e-9, 1e-12, 1e-15] {
+        let axis = x * cos + e1 * (1.0 - cos * cos).sqrt();
+        let mut prev = p.solve(&Parameterization::Focused).unwrap();
+        // Replace the w row by this axis (in world terms).
+        let rows = frame.light_from_world_3x4_rows();
+        prev.clip_from_world = glam::DMat4::from_cols(
+            prev.clip_from_world.row(0),
+            prev.clip_from_world.row(1),
+            prev.clip_from_world.row(2),
+            rows[0] * axis.x + rows[1] * axis.y + rows[2] * axis.z,
+        )
+        .transpose();
+        let m = lixel::optimize_light_matrix(&s, Some(&prev)).unwrap().matrix;
+        assert_covers_all(&m, &[at], &format!("cos {cos}"));
+    }
+}
+
+/// Issue 10 case 7: coordinates beyond the supported range (|x| <= 1e15) are
+/// a typed error; at the edge of the range the solver still works.
+#[test]
+fn coordinates_beyond_the_supported_range_are_a_typed_error() {
+    let limit = lixel::MAX_COORDINATE;
+    for (scale, ok) in [(limit * 0.5, true), (limit * 0.99, true), (limit * 4.0, false), (1e150, false), (1e200, false)] {
+        let camera = Camera::look_at(DVec3::new(0.0, 0.2, 1.0) * scale, DVec3::ZERO, DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.01 * scale, 10.0 * scale);
+        let Ok(camera) = camera else {
+            assert!(!ok, "camera at scale {scale} refused");
+            continue;
+        };
+        let b = Aabb::from_corners(DVec3::new(-0.5, 0.0, -0.5) * scale, DVec3::new(0.5, 0.1, 0.5) * scale);
+        let light = Light::point(DVec3::new(0.1, 0.9, 0.2) * scale);
+        let problem = ShadowProblem::new(camera, light, SceneBounds::uniform(b), ShadowMapSize::square(512));
+        if !ok {
+            assert!(matches!(problem, Err(LixelError::OutOfRange { .. })), "scale {scale}: {problem:?}");
+            continue;
+        }
+        let problem = problem.unwrap();
+        let points = visible_lit_points(&problem);
+        for p in Parameterization::ALL_DEFAULT {
+            let m = problem.solve(&p).unwrap_or_else(|e| panic!("scale {scale} {:?}: {e}", p.method()));
+            assert_covers_all(&m, &points, &format!("scale {scale} {:?}", p.method()));
+        }
+    }
+    // Samples beyond the range are dropped as invalid, never mapped.
+    let problem = ShadowProblem::new(room_camera(), Light::directional(DVec3::NEG_Y), SceneBounds::uniform(room()), ShadowMapSize::square(64)).unwrap();
+    let huge = DVec3::new(1e200, 0.0, -1e200);
+    let s = lixel::Samples::from_points(&problem, &[huge, DVec3::ZERO], &[(huge, DVec3::Y)]);
+    assert_eq!(s.relevant_count(), 1);
+    let m = lixel::optimize_light_matrix(&s, None).unwrap().matrix;
+    assert!(m.clip_from_world.is_finite());
+}

@@ -21,7 +21,7 @@ use glam::{DMat3, DVec2, DVec3};
 use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::min_enclosing_cone;
-use crate::matrix::{fit_homography, AxisFit, Fallback, LightMatrix, Method, Placement};
+use crate::matrix::{fit_homography, AxisFit, Fallback, LightMatrix, Method};
 
 pub use objective::{
     objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
@@ -324,20 +324,9 @@ impl Optimizer {
     }
 
     fn finish(&self, samples: &Samples, homography: DMat3) -> LightMatrix {
-        let problem = &samples.problem;
-        let fit = self.fit_options(samples);
-        Placement {
-            light: *problem.light(),
-            frame: samples.frame,
-            axis: homography.row(2),
-            focus: &[],
-            depth_points: &samples.depth_points,
-            map: problem.map_size(),
-            fit: &fit,
-            tolerances: problem.tolerances(),
-            method: Method::SceneOptimized,
-            fallback: None,
-        }
-        .finish(homography, &self.extreme)
+        samples
+            .problem
+            .placement(samples.frame, homography.row(2), &[], &samples.depth_points, Method::SceneOptimized, None)
+            .finish(homography, &self.extreme)
     }
 }

@@ -169,7 +169,9 @@ impl Samples {
                 (glam::DVec2::new(d.x, d.y) - px * d.w) / clip.w
             };
             let ds = DMat2::from_cols(column(t1), column(t2));
-            if !(ds.determinant().abs() > 0.0) {
+            // Seen (nearly) edge-on: the tangent images are (nearly) parallel.
+            let sine = ds.determinant().abs() / (ds.x_axis.length() * ds.y_axis.length());
+            if !(sine > problem.tolerances().min_view_sine) {
                 samples.counts.rejected_invalid += 1;
                 continue;
             }
@@ -189,7 +191,7 @@ impl Samples {
     /// Adds a relevant world point; `false` if it was rejected.
     fn push_relevant(&mut self, p: DVec3, camera: &crate::Camera) -> bool {
         self.counts.covered += 1;
-        if !p.is_finite() || camera.view_depth(p) <= 0.0 {
+        if !p.is_finite() || p.abs().max_element() > crate::MAX_COORDINATE || camera.view_depth(p) <= 0.0 {
             self.counts.rejected_invalid += 1;
             return false;
         }
