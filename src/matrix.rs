@@ -76,7 +76,10 @@ pub enum Fallback {
     /// Plane-optimal: the view frustum sees no part of the receiver plane
     /// inside the receiver bounds; the focused map was used.
     PlaneNotVisible,
-    /// Scene-optimized: no usable samples; the focused map was used.
+    /// Scene-optimized: no usable samples, or no candidate map held every
+    /// relevant sample (rounding at grazing axes); the focused map was used.
+    /// It holds the visible receivers `V ∩ R ∩ L`; relevant samples outside
+    /// them (which a correct readback does not produce) are not guaranteed.
     NoUsableSamples,
 }
 

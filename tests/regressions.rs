@@ -271,17 +271,21 @@ fn edge_on_boundary_samples_are_dropped() {
     for light in [Light::directional(DVec3::new(0.3, -1.0, 0.2)), Light::point(DVec3::new(3.0, 20.0, 1.0))] {
         let p = ShadowProblem::new(camera, light, SceneBounds::uniform(room()), ShadowMapSize::square(1024)).unwrap();
         let at = DVec3::new(0.5, 0.0, 0.5);
-        // A normal orthogonal to the ray from the eye, up to rounding.
+        // Normals orthogonal to the ray from the eye, up to 1e-17 .. 1e-9.
         let ray = (at - camera.eye()).normalize();
-        let n = ray.cross(view.cross(DVec3::Y)).normalize();
-        let n = (n - ray * n.dot(ray)).normalize();
-        assert!(n.dot(ray).abs() < 1e-15);
+        let n0 = ray.cross(view.cross(DVec3::Y)).normalize();
+        let n0 = (n0 - ray * n0.dot(ray)).normalize();
+        // Facing the light (up), so only the edge-on test can drop it.
+        let n0 = if n0.y < 0.0 { -n0 } else { n0 };
         let good = [(DVec3::new(-1.0, 0.0, 0.0), DVec3::Y), (DVec3::new(1.0, 0.0, -1.0), DVec3::Y)];
-        let boundary = [good[0], (at, n), good[1]];
-        let s = lixel::Samples::from_points(&p, &[], &boundary);
-        assert_eq!(s.boundary().len(), 2, "{light:?}");
-        let m = lixel::optimize_light_matrix(&s, None).unwrap_or_else(|e| panic!("{light:?}: {e}")).matrix;
-        assert_covers_all(&m, &[at, good[0].0, good[1].0], "optimized");
+        for k in 0..26 {
+            let n = (n0 + ray * (f64::from(k) * 2.5e-17 * 1.7f64.powi(k))).normalize();
+            let boundary = [good[0], (at, n), good[1]];
+            let s = lixel::Samples::from_points(&p, &[], &boundary);
+            assert_eq!(s.boundary().len(), 2, "{light:?}, n·ray = {:e}", n.dot(ray));
+            let m = lixel::optimize_light_matrix(&s, None).unwrap_or_else(|e| panic!("{light:?}: {e}")).matrix;
+            assert_covers_all(&m, &[at, good[0].0, good[1].0], "optimized");
+        }
     }
 }
 
