@@ -307,7 +307,8 @@ impl Placement<'_> {
     ///
     /// # Errors
     /// [`LixelError::NotInFront`] when a focus point is not safely in front of
-    /// the light for this axis; [`LixelError::UnusableSamples`] when there
+    /// the light for this axis, or the finished matrix does not hold it (to
+    /// [`Tolerances::coverage_slack`]) in world coordinates; [`LixelError::UnusableSamples`] when there
     /// are no focus points.
     pub(crate) fn build(&self, workspace: &mut FitWorkspace) -> Result<LightMatrix> {
         let xs: Vec<DVec3> = self.focus.iter().map(|&p| self.frame.homogeneous(p)).collect();
@@ -323,7 +324,14 @@ impl Placement<'_> {
             &mut scratch,
         )
         .ok_or(LixelError::NotInFront { method: self.method })?;
-        Ok(self.finish(homography, &xs))
+        let matrix = self.finish(homography, &xs);
+        // Checked again as a renderer will evaluate it, in world coordinates:
+        // composing `G` with a far light's translation can round differently.
+        let slack = self.tolerances.coverage_slack;
+        if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(|&p| matrix.covers(p, slack))) {
+            return Err(LixelError::NotInFront { method: self.method });
+        }
+        Ok(matrix)
     }
 
     /// Adds the depth row to a homography whose third row is the unit axis;

@@ -305,7 +305,11 @@ impl ShadowProblem {
         fallback: Option<Fallback>,
     ) -> Result<LightMatrix> {
         let points = self.mappable_vertices(focus);
-        self.placement(frame, axis, &points, casters.vertices(), method, fallback).build(&mut FitWorkspace::default())
+        // Depth covers the casters and all of `focus`, a vertex at the light
+        // included (then near is clamped and unclipped depth requested).
+        let mut depth_points = casters.vertices().to_vec();
+        depth_points.extend_from_slice(focus.vertices());
+        self.placement(frame, axis, &points, &depth_points, method, fallback).build(&mut FitWorkspace::default())
     }
 
     /// The one constructor of a [`Placement`] for this problem: its light,

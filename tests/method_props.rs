@@ -123,27 +123,37 @@ fn error_is_justified(problem: &ShadowProblem, err: &LixelError, param: &Paramet
     let scale = problem.scale();
     match err {
         LixelError::LightInsideFocus { .. } => {
-            let Some(l) = problem.light().position() else { return false };
+            // Point lights only: a spot under 89° always fits its own frustum.
+            let Light::Point { position: l } = *problem.light() else { return false };
             let in_receivers = expand(&problem.bounds().receivers, 1e-6 * scale).contains(l);
             in_receivers && (matches!(param, Parameterization::Normal) || in_view(problem, l, 1e-6))
         }
         LixelError::NothingVisible { .. } => {
-            sample.is_empty() && problem.light().position().is_some_and(|l| problem.bounds().receivers.contains(l))
+            sample.is_empty()
+                && matches!(*problem.light(), Light::Point { position } if problem.bounds().receivers.contains(position))
         }
         LixelError::NothingLit { .. } => matches!(problem.light(), Light::Spot { .. }) && sample.is_empty(),
         _ => false,
     }
 }
 
+/// Runs `param` over `common::cases()` general configurations and half as
+/// many drawn from the hard regions ([`common::hard_config`]).
 fn run(param: Parameterization, seed: u64) {
     let n = common::cases();
+    let hard = n / 2;
     let mut outcomes: BTreeMap<String, usize> = BTreeMap::new();
     let mut failures = Vec::new();
     let mut checked_points = 0usize;
-    for i in 0..n {
-        let config = common::config(seed, i);
+    for i in 0..n + hard {
+        let (config, region) = if i < n {
+            (common::config(seed, i), "general".to_string())
+        } else {
+            let (config, region) = common::hard_config(seed, i - n);
+            (config, format!("{region:?}"))
+        };
         let Some(problem) = config.problem() else {
-            *outcomes.entry("invalid input".into()).or_default() += 1;
+            *outcomes.entry(format!("{region}: invalid input")).or_default() += 1;
             continue;
         };
         let mut rng = ChaCha8Rng::seed_from_u64(i as u64);
@@ -154,45 +164,45 @@ fn run(param: Parameterization, seed: u64) {
                     Some(f) => format!("fallback {f:?}").split(' ').take(2).collect::<Vec<_>>().join(" "),
                     None => "ok".to_string(),
                 };
-                *outcomes.entry(key).or_default() += 1;
+                *outcomes.entry(format!("{region}: {key}")).or_default() += 1;
                 if !matrix.clip_from_world.is_finite() {
-                    failures.push(format!("#{i}: non-finite matrix\n{config:?}"));
+                    failures.push(format!("#{i} ({region}): non-finite matrix\n{config:?}"));
                     continue;
                 }
                 let checker = Checker { problem: &problem, matrix: &matrix };
+                let l = problem.light().position();
+                let away_from_light = |p: &DVec3| l.is_none_or(|l| (*p - l).length() > 1e-6 * problem.scale());
                 let mut points: Vec<(DVec3, &str)> = sample.iter().map(|&p| (p, "receiver")).collect();
-                points.extend(problem.visible_receiver_body().vertices().iter().map(|&p| (p, "body vertex")));
+                points.extend(
+                    problem.visible_receiver_body().vertices().iter().filter(|p| away_from_light(p)).map(|&p| (p, "body vertex")),
+                );
                 if matches!(param, Parameterization::Psm(_)) && matrix.fallback.is_none() {
-                    let l = problem.light().position();
-                    points.extend(
-                        problem
-                            .psm_hull()
-                            .vertices()
-                            .iter()
-                            .filter(|&&p| l.is_none_or(|l| (p - l).length() > 1e-6 * problem.scale()))
-                            .map(|&p| (p, "H vertex")),
-                    );
+                    points.extend(problem.psm_hull().vertices().iter().filter(|p| away_from_light(p)).map(|&p| (p, "H vertex")));
                 }
                 checked_points += points.len();
                 if let Some(e) = points.iter().find_map(|&(p, what)| checker.check_relevant(p, what).err()) {
-                    failures.push(format!("#{i}: {e}\n  fallback {:?}\n  {config:?}", matrix.fallback));
+                    failures.push(format!("#{i} ({region}): {e}\n  fallback {:?}\n  {config:?}", matrix.fallback));
                 }
             }
             Err(e) => {
                 *outcomes
-                    .entry(format!("error {e:?}").split([' ', '{']).take(2).collect::<Vec<_>>().join(" "))
+                    .entry(format!("{region}: error {e:?}").split([' ', '{']).take(3).collect::<Vec<_>>().join(" "))
                     .or_default() += 1;
                 if !error_is_justified(&problem, &e, &param, &sample) {
-                    failures.push(format!("#{i}: unjustified error {e}\n  {config:?}"));
+                    failures.push(format!("#{i} ({region}): unjustified error {e}\n  {config:?}"));
                 }
             }
         }
     }
-    eprintln!("{:?}: {n} configurations, {checked_points} relevant points checked: {outcomes:#?}", param.method());
+    eprintln!(
+        "{:?}: {n} general + {hard} hard configurations, {checked_points} relevant points checked: {outcomes:#?}",
+        param.method()
+    );
     assert!(
         failures.is_empty(),
-        "{} of {n} configurations failed; first ones:\n{}",
+        "{} of {} configurations failed; first ones:\n{}",
         failures.len(),
+        n + hard,
         failures[..failures.len().min(5)].join("\n")
     );
 }
