@@ -275,10 +275,14 @@ impl Optimizer {
         Ok(Optimized { matrix, report })
     }
 
-    /// Whether `matrix` holds every relevant sample and is finite.
+    /// Whether `matrix` is finite and holds every relevant sample, checked
+    /// in world coordinates as a renderer evaluates it (composing `G` with a
+    /// far light's translation rounds differently from light coordinates).
     fn holds_samples(&self, samples: &Samples, matrix: &LightMatrix) -> bool {
         let slack = samples.problem.tolerances().coverage_slack;
-        matrix.clip_from_world.is_finite() && holds_all(&matrix.homography, &samples.relevant, slack)
+        matrix.clip_from_world.is_finite()
+            && holds_all(&matrix.homography, &samples.relevant, slack)
+            && samples.relevant_world.iter().all(|&p| matrix.covers(p, slack))
     }
 
     /// The objective of optical axis `axis` (light coordinates of

@@ -77,6 +77,9 @@ pub struct Samples {
     pub(crate) boundary: Vec<BoundarySample>,
     /// `X~` of every relevant sample.
     pub(crate) relevant: Vec<DVec3>,
+    /// World position of every relevant sample (the optimizer checks its
+    /// answer on them, as a renderer evaluates it).
+    pub(crate) relevant_world: Vec<DVec3>,
     /// World points whose depth the map must cover: the visible receivers'
     /// body and its casters, and every relevant sample.
     pub(crate) depth_points: Vec<DVec3>,
@@ -97,6 +100,7 @@ impl Samples {
             frame,
             boundary: Vec::new(),
             relevant: Vec::new(),
+            relevant_world: Vec::new(),
             depth_points,
             counts: SampleCounts::default(),
         }
@@ -201,6 +205,7 @@ impl Samples {
             return false;
         }
         self.relevant.push(x);
+        self.relevant_world.push(p);
         self.depth_points.push(p);
         true
     }
@@ -313,6 +318,7 @@ impl Samples {
                 let world = here.truncate() / here.w;
                 let x_light = samples.frame.homogeneous4(here);
                 samples.relevant.push(x_light);
+                samples.relevant_world.push(world);
                 samples.depth_points.push(world);
                 if !mixed {
                     continue;
