@@ -71,7 +71,8 @@ pub enum Fallback {
         blend: f64,
     },
     /// Plane-optimal: the eye or the light lies in the receiver plane, so the
-    /// plane's homography is singular; the focused map was used.
+    /// plane's homography is singular, or the light grazes the plane so
+    /// closely that the map cannot be held in `f64`; the focused map was used.
     PlaneDegenerate,
     /// Plane-optimal: the view frustum sees no part of the receiver plane
     /// inside the receiver bounds; the focused map was used.
@@ -307,8 +308,9 @@ impl Placement<'_> {
     ///
     /// # Errors
     /// [`LixelError::NotInFront`] when a focus point is not safely in front of
-    /// the light for this axis, or the finished matrix does not hold it (to
-    /// [`Tolerances::coverage_slack`]) in world coordinates; [`LixelError::UnusableSamples`] when there
+    /// the light for this axis, or the finished matrix does not hold it in
+    /// the map and the depth range (to [`Tolerances::coverage_slack`]) in
+    /// world coordinates; [`LixelError::UnusableSamples`] when there
     /// are no focus points.
     pub(crate) fn build(&self, workspace: &mut FitWorkspace) -> Result<LightMatrix> {
         let xs: Vec<DVec3> = self.focus.iter().map(|&p| self.frame.homogeneous(p)).collect();
@@ -328,7 +330,13 @@ impl Placement<'_> {
         // Checked again as a renderer will evaluate it, in world coordinates:
         // composing `G` with a far light's translation can round differently.
         let slack = self.tolerances.coverage_slack;
-        if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(|&p| matrix.covers(p, slack))) {
+        let held = |p: &DVec3| {
+            matrix.covers(*p, slack)
+                && matrix.project(*p).is_some_and(|ndc| {
+                    ndc.z <= 1.0 + slack && (ndc.z >= -slack || matrix.needs_unclipped_depth)
+                })
+        };
+        if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(held)) {
             return Err(LixelError::NotInFront { method: self.method });
         }
         Ok(matrix)

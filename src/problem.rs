@@ -155,14 +155,30 @@ impl ShadowProblem {
     /// of every body clipped by its frustum `L` when the light sits inside the
     /// bounds; the directions to the remaining vertices span the body's
     /// directions, so the map still holds all of it.
+    ///
+    /// A spot light's body that lies wholly within that distance (a body
+    /// below the solver's resolution, next to the light) is stood in for by
+    /// points on the corner rays of the spot's pyramid: the map then holds
+    /// the spot's whole frustum, which contains the body.
     #[must_use]
     pub fn mappable_vertices(&self, body: &ConvexPolyhedron) -> Vec<DVec3> {
-        match self.light.position() {
-            None => body.vertices().to_vec(),
-            Some(l) => {
-                let at_light = self.coarse_eps();
-                body.vertices().iter().copied().filter(|&p| (p - l).length() > at_light).collect()
+        let Some(l) = self.light.position() else {
+            return body.vertices().to_vec();
+        };
+        let at_light = self.coarse_eps();
+        let far: Vec<DVec3> = body.vertices().iter().copied().filter(|&p| (p - l).length() > at_light).collect();
+        match self.light {
+            Light::Spot { direction, .. } if far.is_empty() && !body.is_empty() => {
+                let planes = self.light_planes();
+                (0..planes.len())
+                    .filter_map(|k| {
+                        let ray = planes[k].normal.cross(planes[(k + 1) % planes.len()].normal).try_normalize()?;
+                        let ray = if ray.dot(direction) < 0.0 { -ray } else { ray };
+                        Some(l + ray * (2.0 * at_light))
+                    })
+                    .collect()
             }
+            _ => far,
         }
     }
 

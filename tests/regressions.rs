@@ -355,3 +355,112 @@ fn coordinates_beyond_the_supported_range_are_a_typed_error() {
     let m = lixel::optimize_light_matrix(&s, None).unwrap().matrix;
     assert!(m.clip_from_world.is_finite());
 }
+
+/// Checks every visible receiver-body vertex (away from the light) is in the
+/// map and the depth range.
+fn assert_holds_body(problem: &ShadowProblem, p: Parameterization) {
+    let m = problem.solve(&p).unwrap_or_else(|e| panic!("{:?}: {e}", p.method()));
+    let l = problem.light().position();
+    let body: Vec<DVec3> = problem
+        .visible_receiver_body()
+        .vertices()
+        .iter()
+        .copied()
+        .filter(|&v| l.is_none_or(|l| (v - l).length() > 1e-6 * problem.scale()))
+        .collect();
+    assert_covers_all(&m, &body, &format!("{:?}", p.method()));
+}
+
+/// Plane-optimal, hard region "grazing" #67163 (seed 6, 90k run): a point
+/// light 4e-10 above the floor's plane. The blended axis kept every floor
+/// point's `w` above β times the least one in exact arithmetic, but those `w`
+/// were 1e-12 of `|X~|`, and in `f64` a floor corner landed at depth
+/// −2.2e-5. The finished matrix is now checked in world coordinates, and
+/// plane-optimal reports `PlaneDegenerate` when f64 cannot hold its map.
+#[test]
+fn plane_optimal_with_light_in_the_floor_plane_keeps_the_depth_range() {
+    let camera = Camera::look_at(
+        DVec3::new(1.9360924026467237, -0.9268913780529672, 0.6654245810146547),
+        DVec3::new(-0.22494039241767558, 0.23956020652308835, 0.3756719905191404),
+        DVec3::Y,
+        2.3557597320547092,
+        UVec2::new(1659, 1717),
+        0.04328949380293638,
+        1262.4021651725532,
+    )
+    .unwrap();
+    let light = Light::point(DVec3::new(-22.375779810112363, -0.40109724211488135, -2.499877035266119));
+    let bounds = SceneBounds {
+        casters: Aabb {
+            min: DVec3::new(-0.28174752506620226, -0.4010972415401152, -0.4961496543060369),
+            max: DVec3::new(-0.10572361657447339, 0.46432358122034617, 0.44767088330862304),
+        },
+        receivers: Aabb {
+            min: DVec3::new(-0.28174752506620226, -0.4010972415401152, -0.4961496543060369),
+            max: DVec3::new(-0.10572361657447339, -0.4010972415401152, 0.44767088330862304),
+        },
+    };
+    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(948)).unwrap();
+    assert_holds_body(&problem, Parameterization::PlaneOptimal(Default::default()));
+}
+
+/// Plane-optimal, "grazing" #62508: a directional light 6e-10 below
+/// horizontal over a flat floor reported `NotInFront`.
+#[test]
+fn plane_optimal_with_horizontal_sun_over_a_floor_is_not_an_error() {
+    let camera = Camera::look_at(
+        DVec3::new(51.02038592423175, 26.120094933132638, -75.38953243922113),
+        DVec3::new(27.201416520090795, -3.1962779393709897, -60.66330686653177),
+        DVec3::Y,
+        1.0836830685586671,
+        UVec2::new(1242, 706),
+        0.05318870711353478,
+        35.97460133767505,
+    )
+    .unwrap();
+    let light = Light::directional(DVec3::new(0.47161202471064134, -6.124734391820019e-10, -0.8818061567874934));
+    let bounds = SceneBounds {
+        casters: Aabb {
+            min: DVec3::new(18.036484207714864, 17.127048398932317, -56.54890056347891),
+            max: DVec3::new(29.786993862873132, 38.77960190163786, -53.83358497355999),
+        },
+        receivers: Aabb {
+            min: DVec3::new(16.333821802019088, -6.310620529748651, -77.41105186135864),
+            max: DVec3::new(51.72056996986384, -6.310620529748651, -1.5720713398092554),
+        },
+    };
+    let problem = ShadowProblem::new(camera, light, bounds, ShadowMapSize::square(4059)).unwrap();
+    assert_holds_body(&problem, Parameterization::PlaneOptimal(Default::default()));
+}
+
+/// PSM, "spot inside" #61240 (seed 3): a spot 0.16 above a 1.6e5-wide floor,
+/// pointing down, unseen by the camera. Its lit body (0.2 across) lies
+/// within the solver's resolution of the light, so every vertex was "at the
+/// light" and the normal-map fallback failed with `NothingVisible`. The map
+/// now holds the spot's whole frustum.
+#[test]
+fn tiny_spot_body_next_to_the_light_maps_the_spot_frustum() {
+    let camera = Camera::look_at(
+        DVec3::new(50902.27611541787, 3234.7428144806586, -14893.803113702146),
+        DVec3::new(21513.353664694787, 904.8995846768225, -90056.06913286846),
+        DVec3::Y,
+        2.0867248902305975,
+        UVec2::new(745, 1546),
+        212.93640831103676,
+        2053800.3899117818,
+    )
+    .unwrap();
+    let light = Light::spot(
+        DVec3::new(24253.13819602439, 0.16196630520639854, 11090.878758657476),
+        DVec3::new(-0.18838262852575793, -0.9809061206941504, -0.04832357245153932),
+        0.45060970862140015,
+    );
+    let b = Aabb::from_corners(DVec3::new(-80737.24769538532, 0.0, -80737.24769538532), DVec3::new(80737.24769538532, 2074.5274577591513, 80737.24769538532));
+    let problem = ShadowProblem::new(camera, light, SceneBounds::uniform(b), ShadowMapSize::new(1066, 24)).unwrap();
+    for p in Parameterization::ALL_DEFAULT {
+        let m = problem.solve(&p).unwrap_or_else(|e| panic!("{:?}: {e}", p.method()));
+        // The lit floor under the spot lies in the map.
+        let under = light.position().unwrap() + DVec3::new(-0.18838262852575793, -0.9809061206941504, -0.04832357245153932) * 0.16;
+        assert!(m.covers(under.with_y(0.0), 1e-6), "{:?}", p.method());
+    }
+}

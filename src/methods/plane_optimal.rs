@@ -116,7 +116,11 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
         }
         (blended(hi), Some(Fallback::PlaneOptimalBlended { blend: hi }))
     };
-    problem.place(frame, axis, &focus, Method::PlaneOptimal, fallback)
+    // So near the plane's vanishing line that f64 cannot hold the map (a
+    // light grazing the plane): the plane is degenerate for this light.
+    problem.place(frame, axis, &focus, Method::PlaneOptimal, fallback).or_else(|_| {
+        super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate))
+    })
 }
 
 /// The unit plane-optimal axis in light coordinates of `frame`, or `None`

@@ -236,7 +236,7 @@ impl Samples {
         {
             return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
         }
-        if light_index >= 32 {
+        if light_index as usize >= crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "light index must be below 32" });
         }
         let mut samples = Self::empty(problem);
