@@ -13,7 +13,7 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use glam::{DVec3, DVec4};
+use glam::{DMat4, DVec3, DVec4};
 use lixel::{Aabb, Light, LightMatrix, LixelError, Parameterization, ShadowProblem};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -235,4 +235,84 @@ fn lispsm_simple_keeps_every_relevant_point() {
 #[test]
 fn plane_optimal_keeps_every_relevant_point() {
     run(Parameterization::PlaneOptimal(Default::default()), 6);
+}
+
+/// `m` scaled to unit Frobenius norm.
+fn normalized(m: &DMat4) -> DMat4 {
+    let n = m.to_cols_array().iter().map(|v| v * v).sum::<f64>().sqrt();
+    *m * (1.0 / n)
+}
+
+/// Smallest relative distance between `a` and `b` over the map's harmless
+/// symmetries: NDC x and y mirrored, swapped, or both (eight signed
+/// permutations of the first two rows).
+fn distance_modulo_rectangle(a: &DMat4, b: &DMat4) -> f64 {
+    let (a, b) = (normalized(a), normalized(b));
+    let mut best = f64::INFINITY;
+    for swap in [false, true] {
+        for sx in [1.0, -1.0] {
+            for sy in [1.0, -1.0] {
+                let (r0, r1) = if swap { (a.row(1), a.row(0)) } else { (a.row(0), a.row(1)) };
+                let m = DMat4::from_cols(r0 * sx, r1 * sy, a.row(2), a.row(3)).transpose();
+                let d = (m - b).to_cols_array().iter().map(|v| v * v).sum::<f64>().sqrt();
+                best = best.min(d);
+            }
+        }
+    }
+    best
+}
+
+/// Continuity: a 1e-9 relative nudge of the light may flip the map's
+/// rectangle (mirror or 90° swap, harmless) but otherwise moves the matrix by
+/// a comparable amount. Counted over general configurations. Jumps where a
+/// method switches branch (a fallback starts or stops) are legitimate; jumps
+/// within one branch are a known gap (issue 10: about 0.5% of matrices,
+/// mostly PSM, whose hull `H` changes topology under the nudge, and the
+/// minimum-area rectangle switching caliper edge). The test fails above 1%.
+#[test]
+fn a_tiny_light_nudge_moves_every_matrix_continuously() {
+    let n = common::cases() / 4;
+    let mut jumps: BTreeMap<String, usize> = BTreeMap::new();
+    let mut compared = 0usize;
+    let mut failures = Vec::new();
+    for i in 0..n {
+        let config = common::config(21, i);
+        let Some(problem) = config.problem() else { continue };
+        let mut nudged = config;
+        nudged.light = match config.light {
+            Light::Directional { direction } => Light::directional(direction + DVec3::new(1e-9, -1e-9, 0.5e-9)),
+            Light::Point { position } => Light::point(position + DVec3::new(1e-9, -1e-9, 0.5e-9) * problem.scale()),
+            Light::Spot { position, direction, outer_half_angle_radians } => Light::spot(
+                position + DVec3::new(1e-9, -1e-9, 0.5e-9) * problem.scale(),
+                direction,
+                outer_half_angle_radians,
+            ),
+        };
+        let Some(other) = nudged.problem() else { continue };
+        for p in Parameterization::ALL_DEFAULT {
+            let (Ok(a), Ok(b)) = (problem.solve(&p), other.solve(&p)) else { continue };
+            compared += 1;
+            let d = distance_modulo_rectangle(&a.clip_from_world, &b.clip_from_world);
+            if d > 1e-4 {
+                let same_branch = std::mem::discriminant(&a.fallback) == std::mem::discriminant(&b.fallback)
+                    && a.fallback.map(|f| format!("{f:?}").split(' ').next().map(str::to_owned))
+                        == b.fallback.map(|f| format!("{f:?}").split(' ').next().map(str::to_owned));
+                let key = format!("{:?} {}", p.method(), if same_branch { "same branch" } else { "branch switch" });
+                *jumps.entry(key).or_default() += 1;
+                if same_branch {
+                    failures.push(format!("#{i} {:?}: moved {d:e} for a 1e-9 nudge\n  {config:?}", p.method()));
+                }
+            }
+        }
+    }
+    eprintln!("{compared} matrices compared; jumps beyond 1e-4: {jumps:#?}");
+    for f in failures.iter().take(3) {
+        eprintln!("{f}");
+    }
+    assert!(
+        failures.len() * 100 <= compared,
+        "{} discontinuities within one branch (more than 1 in 100); first ones:\n{}",
+        failures.len(),
+        failures[..failures.len().min(5)].join("\n")
+    );
 }
