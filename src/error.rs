@@ -78,14 +78,17 @@ pub enum LixelError {
         method: Method,
     },
     /// No optical axis puts every relevant point safely in front of the
-    /// light (an internal invariant of the method failed; please report it).
+    /// light, or the finished matrix (checked in world coordinates) would not
+    /// hold them: an internal invariant of the method failed; please report it.
     #[error("{method:?}: relevant points lie behind the light's image plane")]
     NotInFront {
         /// The method that was asked for.
         method: Method,
     },
-    /// The receiver plane given to the plane-optimal method is invalid or
-    /// contains the eye.
+    /// The receiver plane given to the plane-optimal method is invalid
+    /// (non-finite, zero normal) or its options are (`min_relative_w` outside
+    /// `(0, 1)`). An eye in the plane is not an error: the method falls back
+    /// with [`Fallback::PlaneDegenerate`](crate::Fallback::PlaneDegenerate).
     #[error("invalid receiver plane: {reason}")]
     InvalidPlane {
         /// What is wrong with it.

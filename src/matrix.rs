@@ -332,9 +332,9 @@ impl Placement<'_> {
         let slack = self.tolerances.coverage_slack;
         let held = |p: &DVec3| {
             matrix.covers(*p, slack)
-                && matrix.project(*p).is_some_and(|ndc| {
-                    ndc.z <= 1.0 + slack && (ndc.z >= -slack || matrix.needs_unclipped_depth)
-                })
+                && matrix
+                    .project(*p)
+                    .is_some_and(|ndc| ndc.z <= 1.0 + slack && (ndc.z >= -slack || matrix.needs_unclipped_depth))
         };
         if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(held)) {
             return Err(LixelError::NotInFront { method: self.method });

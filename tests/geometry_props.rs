@@ -3,7 +3,6 @@
 //! Every loop is seeded, so failures reproduce; the case index is in each
 //! message. Set `LIXEL_STRESS=<factor>` to run that many times more cases.
 
-
 use glam::{DMat3, DMat4, DVec3};
 use lixel::geometry::{default_eps, min_enclosing_cone, ConvexPolyhedron, Plane};
 use proptest::prelude::*;

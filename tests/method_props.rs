@@ -174,10 +174,17 @@ fn run(param: Parameterization, seed: u64) {
                 let away_from_light = |p: &DVec3| l.is_none_or(|l| (*p - l).length() > 1e-6 * problem.scale());
                 let mut points: Vec<(DVec3, &str)> = sample.iter().map(|&p| (p, "receiver")).collect();
                 points.extend(
-                    problem.visible_receiver_body().vertices().iter().filter(|p| away_from_light(p)).map(|&p| (p, "body vertex")),
+                    problem
+                        .visible_receiver_body()
+                        .vertices()
+                        .iter()
+                        .filter(|p| away_from_light(p))
+                        .map(|&p| (p, "body vertex")),
                 );
                 if matches!(param, Parameterization::Psm(_)) && matrix.fallback.is_none() {
-                    points.extend(problem.psm_hull().vertices().iter().filter(|p| away_from_light(p)).map(|&p| (p, "H vertex")));
+                    points.extend(
+                        problem.psm_hull().vertices().iter().filter(|p| away_from_light(p)).map(|&p| (p, "H vertex")),
+                    );
                 }
                 checked_points += points.len();
                 if let Some(e) = points.iter().find_map(|&(p, what)| checker.check_relevant(p, what).err()) {

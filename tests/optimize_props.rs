@@ -409,8 +409,12 @@ fn degenerate_sample_sets_with_prev_keep_every_sample() {
     let mut outcomes: std::collections::BTreeMap<String, usize> = Default::default();
     let mut optimizer = Optimizer::new(OptimizeOptions::default());
     for i in 0..2 * n {
-        let (config, region) =
-            if i < n { (common::config(11, i), "general".to_string()) } else { let (c, r) = common::hard_config(11, i - n); (c, format!("{r:?}")) };
+        let (config, region) = if i < n {
+            (common::config(11, i), "general".to_string())
+        } else {
+            let (c, r) = common::hard_config(11, i - n);
+            (c, format!("{r:?}"))
+        };
         let Some(problem) = config.problem() else { continue };
         let body = problem.visible_receiver_body();
         let mut rng = ChaCha8Rng::seed_from_u64(i as u64);
@@ -455,17 +459,27 @@ fn degenerate_sample_sets_with_prev_keep_every_sample() {
                 let points: Vec<DVec3> = boundary
                     .iter()
                     .map(|b| b.0)
-                    .filter(|&p| camera.view_depth(p) > 0.0 && problem.light().position().is_none_or(|l| (p - l).length() > 1e-6 * problem.scale()))
+                    .filter(|&p| {
+                        camera.view_depth(p) > 0.0
+                            && problem.light().position().is_none_or(|l| (p - l).length() > 1e-6 * problem.scale())
+                    })
                     .collect();
                 if let Err(e) = check_covers(&result.matrix, &points, &format!("#{i} ({region})")) {
-                    failures.push(format!("{e}\n  fallback {:?}, prev {:?}\n  {config:?}", result.report.fallback, prev.map(|m| m.method)));
+                    failures.push(format!(
+                        "{e}\n  fallback {:?}, prev {:?}\n  {config:?}",
+                        result.report.fallback,
+                        prev.map(|m| m.method)
+                    ));
                 }
             }
             Err(e) => {
-                *outcomes.entry(format!("{region}: error {e:?}").split([' ', '{']).take(3).collect::<Vec<_>>().join(" ")).or_default() += 1;
+                *outcomes
+                    .entry(format!("{region}: error {e:?}").split([' ', '{']).take(3).collect::<Vec<_>>().join(" "))
+                    .or_default() += 1;
                 let focused_err = problem.solve(&Parameterization::Focused).err();
                 let justified = focused_err.as_ref() == Some(&e)
-                    || (matches!(e, LixelError::UnusableSamples { .. }) && matches!(problem.light(), Light::Point { .. }));
+                    || (matches!(e, LixelError::UnusableSamples { .. })
+                        && matches!(problem.light(), Light::Point { .. }));
                 if !justified {
                     failures.push(format!("#{i} ({region}): unjustified {e}\n  {config:?}"));
                 }
@@ -473,5 +487,10 @@ fn degenerate_sample_sets_with_prev_keep_every_sample() {
         }
     }
     eprintln!("degenerate sample sets, {} configurations: {outcomes:#?}", 2 * n);
-    assert!(failures.is_empty(), "{} failed; first ones:\n{}", failures.len(), failures[..failures.len().min(5)].join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} failed; first ones:\n{}",
+        failures.len(),
+        failures[..failures.len().min(5)].join("\n")
+    );
 }

@@ -110,8 +110,16 @@ fn nothing_visible_with_light_inside_receivers_is_its_own_error() {
 // ---- Issue 10: an independent contract checker's findings, one test each. ----
 
 fn room_camera() -> Camera {
-    Camera::look_at(DVec3::new(0.0, 1.7, 10.0), DVec3::ZERO, DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.1, 100.0)
-        .unwrap()
+    Camera::look_at(
+        DVec3::new(0.0, 1.7, 10.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        60f64.to_radians(),
+        UVec2::new(800, 600),
+        0.1,
+        100.0,
+    )
+    .unwrap()
 }
 
 fn room() -> Aabb {
@@ -203,7 +211,13 @@ fn far_point_and_spot_lights_behave_like_the_sun_they_approach() {
                 let what = format!("{light:?} {:?}", p.method());
                 let m = problem.solve(&p).unwrap_or_else(|e| panic!("{what}: {e}"));
                 let m_sun = sun.solve(&p).unwrap();
-                assert_eq!(m.fallback.is_some(), m_sun.fallback.is_some(), "{what}: {:?} vs the sun's {:?}", m.fallback, m_sun.fallback);
+                assert_eq!(
+                    m.fallback.is_some(),
+                    m_sun.fallback.is_some(),
+                    "{what}: {:?} vs the sun's {:?}",
+                    m.fallback,
+                    m_sun.fallback
+                );
                 assert_covers_all(&m, &points, &what);
             }
         }
@@ -218,8 +232,26 @@ fn casters_at_grazing_light_stay_in_the_depth_range() {
     let receivers = Aabb::from_corners(DVec3::new(-50.0, 0.0, -50.0), DVec3::new(50.0, 0.0, 50.0));
     let casters = Aabb::from_corners(DVec3::new(-50.0, 0.0, -50.0), DVec3::new(50.0, 20.0, 50.0));
     let cameras = [
-        Camera::look_at(DVec3::new(0.0, 0.0, 40.0), DVec3::new(5.0, 0.0, 0.0), DVec3::Y, 60f64.to_radians(), UVec2::new(370, 737), 0.03, 0.07).unwrap(),
-        Camera::look_at(DVec3::new(0.0, 5.0, 60.0), DVec3::ZERO, DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.1, 200.0).unwrap(),
+        Camera::look_at(
+            DVec3::new(0.0, 0.0, 40.0),
+            DVec3::new(5.0, 0.0, 0.0),
+            DVec3::Y,
+            60f64.to_radians(),
+            UVec2::new(370, 737),
+            0.03,
+            0.07,
+        )
+        .unwrap(),
+        Camera::look_at(
+            DVec3::new(0.0, 5.0, 60.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            60f64.to_radians(),
+            UVec2::new(800, 600),
+            0.1,
+            200.0,
+        )
+        .unwrap(),
     ];
     for camera in cameras {
         for h in [0.0, 1e-6, 1e-4, 1e-2] {
@@ -239,7 +271,10 @@ fn casters_at_grazing_light_stay_in_the_depth_range() {
                             continue;
                         }
                         let z = m.project(q).map_or(f64::NAN, |n| n.z);
-                        assert!(z <= zv + 1e-9 && (z >= -1e-6 || m.needs_unclipped_depth), "{what}: caster {q} at depth {z} (receiver {zv})");
+                        assert!(
+                            z <= zv + 1e-9 && (z >= -1e-6 || m.needs_unclipped_depth),
+                            "{what}: caster {q} at depth {z} (receiver {zv})"
+                        );
                     }
                 }
             }
@@ -251,9 +286,24 @@ fn casters_at_grazing_light_stay_in_the_depth_range() {
 /// one light depth gave `alpha = inf` in the depth row.
 #[test]
 fn optimizer_with_empty_view_body_and_one_depth_is_finite() {
-    let camera = Camera::look_at(DVec3::new(0.0, 10.0, 20.0), DVec3::new(0.0, 5.0, 0.0), DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.1, 100.0).unwrap();
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 10.0, 20.0),
+        DVec3::new(0.0, 5.0, 0.0),
+        DVec3::Y,
+        60f64.to_radians(),
+        UVec2::new(800, 600),
+        0.1,
+        100.0,
+    )
+    .unwrap();
     let unseen = Aabb::from_corners(DVec3::new(-1.0, 0.0, 200.0), DVec3::new(1.0, 1.0, 202.0));
-    let p = ShadowProblem::new(camera, Light::directional(DVec3::NEG_Y), SceneBounds::uniform(unseen), ShadowMapSize::square(1024)).unwrap();
+    let p = ShadowProblem::new(
+        camera,
+        Light::directional(DVec3::NEG_Y),
+        SceneBounds::uniform(unseen),
+        ShadowMapSize::square(1024),
+    )
+    .unwrap();
     let rel = [DVec3::new(0.0, 5.0, 0.0), DVec3::new(1.0, 5.0, 0.0), DVec3::new(0.0, 5.0, 1.0)];
     let boundary = [(DVec3::new(0.5, 5.0, 0.5), DVec3::Y)];
     let s = lixel::Samples::from_points(&p, &rel, &boundary);
@@ -327,8 +377,17 @@ fn optimizer_map_holds_its_only_sample_with_a_lispsm_prev() {
 #[test]
 fn coordinates_beyond_the_supported_range_are_a_typed_error() {
     let limit = lixel::MAX_COORDINATE;
-    for (scale, ok) in [(limit * 0.5, true), (limit * 0.99, true), (limit * 4.0, false), (1e150, false), (1e200, false)] {
-        let camera = Camera::look_at(DVec3::new(0.0, 0.2, 1.0) * scale, DVec3::ZERO, DVec3::Y, 60f64.to_radians(), UVec2::new(800, 600), 0.01 * scale, 10.0 * scale);
+    for (scale, ok) in [(limit * 0.5, true), (limit * 0.99, true), (limit * 4.0, false), (1e150, false), (1e200, false)]
+    {
+        let camera = Camera::look_at(
+            DVec3::new(0.0, 0.2, 1.0) * scale,
+            DVec3::ZERO,
+            DVec3::Y,
+            60f64.to_radians(),
+            UVec2::new(800, 600),
+            0.01 * scale,
+            10.0 * scale,
+        );
         let Ok(camera) = camera else {
             assert!(!ok, "camera at scale {scale} refused");
             continue;
@@ -348,7 +407,13 @@ fn coordinates_beyond_the_supported_range_are_a_typed_error() {
         }
     }
     // Samples beyond the range are dropped as invalid, never mapped.
-    let problem = ShadowProblem::new(room_camera(), Light::directional(DVec3::NEG_Y), SceneBounds::uniform(room()), ShadowMapSize::square(64)).unwrap();
+    let problem = ShadowProblem::new(
+        room_camera(),
+        Light::directional(DVec3::NEG_Y),
+        SceneBounds::uniform(room()),
+        ShadowMapSize::square(64),
+    )
+    .unwrap();
     let huge = DVec3::new(1e200, 0.0, -1e200);
     let s = lixel::Samples::from_points(&problem, &[huge, DVec3::ZERO], &[(huge, DVec3::Y)]);
     assert_eq!(s.relevant_count(), 1);
@@ -455,12 +520,16 @@ fn tiny_spot_body_next_to_the_light_maps_the_spot_frustum() {
         DVec3::new(-0.18838262852575793, -0.9809061206941504, -0.04832357245153932),
         0.45060970862140015,
     );
-    let b = Aabb::from_corners(DVec3::new(-80737.24769538532, 0.0, -80737.24769538532), DVec3::new(80737.24769538532, 2074.5274577591513, 80737.24769538532));
+    let b = Aabb::from_corners(
+        DVec3::new(-80737.24769538532, 0.0, -80737.24769538532),
+        DVec3::new(80737.24769538532, 2074.5274577591513, 80737.24769538532),
+    );
     let problem = ShadowProblem::new(camera, light, SceneBounds::uniform(b), ShadowMapSize::new(1066, 24)).unwrap();
     for p in Parameterization::ALL_DEFAULT {
         let m = problem.solve(&p).unwrap_or_else(|e| panic!("{:?}: {e}", p.method()));
         // The lit floor under the spot lies in the map.
-        let under = light.position().unwrap() + DVec3::new(-0.18838262852575793, -0.9809061206941504, -0.04832357245153932) * 0.16;
+        let under = light.position().unwrap()
+            + DVec3::new(-0.18838262852575793, -0.9809061206941504, -0.04832357245153932) * 0.16;
         assert!(m.covers(under.with_y(0.0), 1e-6), "{:?}", p.method());
     }
 }

@@ -100,8 +100,7 @@ pub(crate) fn uniform_axis(
             if !spot && body.contains(*position, problem.eps()) {
                 return Err(LixelError::LightInsideFocus { method });
             }
-            let dirs: Vec<DVec3> =
-                problem.mappable_vertices(body).iter().map(|&p| frame.homogeneous(p)).collect();
+            let dirs: Vec<DVec3> = problem.mappable_vertices(body).iter().map(|&p| frame.homogeneous(p)).collect();
             min_enclosing_cone(&dirs)
                 .filter(|cone| cone.cos_half_angle > problem.tolerances().min_front_cosine)
                 .map(|cone| cone.axis)

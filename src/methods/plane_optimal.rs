@@ -118,9 +118,9 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
     };
     // So near the plane's vanishing line that f64 cannot hold the map (a
     // light grazing the plane): the plane is degenerate for this light.
-    problem.place(frame, axis, &focus, Method::PlaneOptimal, fallback).or_else(|_| {
-        super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate))
-    })
+    problem
+        .place(frame, axis, &focus, Method::PlaneOptimal, fallback)
+        .or_else(|_| super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate)))
 }
 
 /// The unit plane-optimal axis in light coordinates of `frame`, or `None`

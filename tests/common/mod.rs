@@ -225,7 +225,11 @@ pub fn hard_config(seed: u64, index: usize) -> (Config, Region) {
             config.light = if rng.random_bool(0.7) {
                 Light::point(position)
             } else {
-                Light::spot(position, (from - position).normalize() + unit(&mut rng) * 1e-3, rng.random_range(1f64..60.0).to_radians())
+                Light::spot(
+                    position,
+                    (from - position).normalize() + unit(&mut rng) * 1e-3,
+                    rng.random_range(1f64..60.0).to_radians(),
+                )
             };
             Region::PointAtDistance
         }
