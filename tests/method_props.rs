@@ -273,9 +273,9 @@ fn distance_modulo_rectangle(a: &DMat4, b: &DMat4) -> f64 {
 /// rectangle (mirror or 90° swap, harmless) but otherwise moves the matrix by
 /// a comparable amount. Counted over general configurations. Jumps where a
 /// method switches branch (a fallback starts or stops) are legitimate; jumps
-/// within one branch are a known gap: about 0.2% of matrices (issue 10,
-/// seed 21: 8 of 4628, 7 of them PSM; the minimum-area rectangle's tie-break
-/// removed 15 more). The test fails above 1%.
+/// within one branch are a known gap: about 0.15% of matrices (issue 10,
+/// seed 21: 7 of 4628, 6 of them PSM; the minimum-area rectangle's tie-break
+/// removed 16 more). The test fails above 1%.
 #[test]
 fn a_tiny_light_nudge_moves_every_matrix_continuously() {
     let n = common::cases() / 4;

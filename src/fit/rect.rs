@@ -191,10 +191,10 @@ fn advance_while(k: &mut usize, limit: usize, keep_going: impl Fn(usize) -> bool
 /// 1983) visit the edges in order while three pointers track the vertices
 /// extreme along the edge (both ways) and farthest from it; each pointer only
 /// moves forwards, so all `h` candidates cost `O(h)` in total. Candidates
-/// within a relative `1e-6` of the least area count as tied and go to the
+/// within a relative `1e-9` of the least area count as tied and go to the
 /// longest edge (a deterministic tie-break, so the rectangle moves
-/// continuously with its input; the area is then at most `1e-6` above the
-/// minimum). The winning edge's rectangle is then recomputed from all
+/// continuously with its input; the area is then at most `1e-9` above the
+/// minimum, within the brute-force oracle's tolerance). The winning edge's rectangle is then recomputed from all
 /// vertices, so that containment never depends on the pointer bookkeeping.
 /// `O(h)` time (two passes), no allocation.
 #[must_use]
@@ -214,7 +214,7 @@ pub fn min_area_rect(hull: &[DVec2]) -> Option<Parallelogram> {
 }
 
 /// Relative band within which two flush rectangles count as tied in area.
-const AREA_TIE: f64 = 1e-6;
+const AREA_TIE: f64 = 1e-9;
 
 /// The index `i` of the hull edge `hull[i] → hull[i + 1]` whose flush
 /// rectangle has the least area, by rotating calipers; `None` if no edge gives
@@ -226,18 +226,23 @@ const AREA_TIE: f64 = 1e-6;
 /// rectangle, not whichever rounding favours, so a tiny change of the input
 /// moves the map continuously. Two caliper passes, no allocation.
 fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
-    let mut least = f64::INFINITY;
-    calipers(hull, |_, area, _| least = least.min(area));
-    if !least.is_finite() {
-        return None;
-    }
+    let mut least: Option<(f64, usize)> = None;
+    calipers(hull, |i, area, _| {
+        if least.is_none_or(|(a, _)| area < a) {
+            least = Some((area, i));
+        }
+    });
+    let (least_area, least_index) = least?;
+    // (Rounding can make a sliver's area slightly negative: the band is
+    // measured from the least area either way.)
+    let band = least_area + AREA_TIE * least_area.abs();
     let mut best: Option<(f64, usize)> = None;
     calipers(hull, |i, area, length| {
-        if area <= least * (1.0 + AREA_TIE) && best.is_none_or(|(longest, _)| length > longest) {
+        if area <= band && best.is_none_or(|(longest, _)| length > longest) {
             best = Some((length, i));
         }
     });
-    best.map(|(_, i)| i)
+    Some(best.map_or(least_index, |(_, i)| i))
 }
 
 /// Calls `visit(i, area, edge length)` for each hull edge with a finite
