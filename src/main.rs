@@ -10,7 +10,7 @@ use glam::{DVec3, UVec2};
 use lixel::experiment::{
     self, ExperimentConfig, LightKind, MethodKind, Preset, Progress, SceneSource, TimingOptions, Truth,
 };
-use lixel::render::Renderer;
+use lixel::render::Gpu;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
@@ -135,6 +135,19 @@ struct ExperimentArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// wgpu backend: auto (Vulkan, else GL; `WGPU_BACKEND` when set), vulkan or gl.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// `WGPU_BACKEND` when set, else Vulkan (lavapipe without a GPU), else GL (llvmpipe).
+    Auto,
+    /// Vulkan only.
+    Vulkan,
+    /// OpenGL (ES) through EGL only.
+    Gl,
 }
 
 #[derive(clap::Args)]
@@ -205,26 +218,45 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     Ok(c)
 }
 
-/// A device and queue from the system's adapter (lavapipe on machines without a GPU).
-fn gpu() -> Result<(wgpu::Device, wgpu::Queue), String> {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-        .map_err(|e| format!("no GPU adapter ({e}); on Debian install mesa-vulkan-drivers"))?;
-    let mut limits = wgpu::Limits::default();
-    // The focused 4000² truth needs more than the default 8192 texture limit allows... and room.
-    limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
-    pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("lixel"),
-        required_features: adapter.features() & Renderer::optional_features(),
-        required_limits: limits,
-        ..Default::default()
-    }))
-    .map_err(|e| format!("cannot open the GPU device: {e}"))
+/// A device on the chosen backend (lavapipe or llvmpipe on machines without a GPU).
+fn gpu(backend: BackendArg) -> Result<Gpu, String> {
+    let backends = match backend {
+        BackendArg::Auto => None,
+        BackendArg::Vulkan => Some(wgpu::Backends::VULKAN),
+        BackendArg::Gl => Some(wgpu::Backends::GL),
+    };
+    Gpu::open(backends, "lixel").map_err(|e| e.to_string())
+}
+
+/// Mesa's Vulkan and EGL drivers print "error: XDG_RUNTIME_DIR is invalid or
+/// not set" when the variable is missing, which reads like a failure on a
+/// healthy run. Without one, give them a private directory (mode 0700, as
+/// the spec asks). Called before any wgpu call, while single-threaded.
+fn ensure_runtime_dir() {
+    let valid = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if valid {
+        return;
+    }
+    let user = std::env::var("USER").unwrap_or_else(|_| "user".into());
+    let dir = std::env::temp_dir().join(format!("lixel-runtime-{user}"));
+    if std::fs::create_dir_all(&dir).is_err() {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        if std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).is_err() {
+            return;
+        }
+    }
+    std::env::set_var("XDG_RUNTIME_DIR", &dir);
 }
 
 fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let config = experiment_config(args)?;
-    let (device, queue) = gpu()?;
+    let gpu = gpu(args.backend)?;
+    let (device, queue) = (&gpu.device, &gpu.queue);
+    eprintln!("adapter: {}", gpu.describe());
     if args.timing {
         let options = TimingOptions {
             frames: args.timing_frames,
@@ -252,7 +284,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
                 );
             }
         };
-        let rows = experiment::run_timing(&config, &options, &device, &queue, progress).map_err(|e| e.to_string())?;
+        let rows = experiment::run_timing(&config, &options, device, queue, progress).map_err(|e| e.to_string())?;
         let table = experiment::timing_markdown(&rows);
         std::fs::create_dir_all(&config.out).map_err(|e| e.to_string())?;
         let path = config.out.join("timing.md");
@@ -275,7 +307,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             bar.set_position(p.done as u64);
         }
     };
-    let summary = experiment::run(&config, &device, &queue, &mut progress).map_err(|e| e.to_string())?;
+    let summary = experiment::run(&config, device, queue, &mut progress).map_err(|e| e.to_string())?;
     if let Some(bar) = bar {
         bar.finish();
     }
@@ -333,6 +365,7 @@ fn run_methods(args: &MethodsArgs) -> Result<(), String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    ensure_runtime_dir();
     let result = match &cli.command {
         Command::Experiment(args) => run_experiment(args),
         Command::Methods(args) => run_methods(args),

@@ -672,7 +672,8 @@ pub fn run(
     }
     let rows = writer.rows().to_vec();
     let equivalence = report::equivalence(&mut runner, config)?;
-    let summary = report::summarize(config, &rows, equivalence, started.elapsed());
+    let mut summary = report::summarize(config, &rows, equivalence, started.elapsed());
+    summary.adapter = crate::render::device::describe(&device.adapter_info());
     report::write_all(&mut runner, config, &rows, &summary)?;
     Ok(summary)
 }
