@@ -403,7 +403,6 @@ impl CameraTargets {
 /// layers are as large as the largest map (each map uses the top-left
 /// `width x height` texels of its layer).
 pub(crate) struct ShadowMaps {
-    pub(crate) texture: wgpu::Texture,
     pub(crate) array_view: wgpu::TextureView,
     pub(crate) layer_views: Vec<wgpu::TextureView>,
     pub(crate) width: u32,
@@ -443,7 +442,7 @@ impl ShadowMaps {
                 })
             })
             .collect();
-        Self { texture, array_view, layer_views, width, height }
+        Self { array_view, layer_views, width, height }
     }
 
     pub(crate) fn layers(&self) -> u32 {
