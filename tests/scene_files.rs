@@ -106,7 +106,8 @@ fn far_and_non_finite_vertices_are_refused_with_the_vertex() {
 
 #[test]
 fn empty_zero_size_and_all_degenerate_meshes_are_refused() {
-    for (name, text) in [("empty", ""), ("comments", "# nothing\nv 1 2 3\n"), ("lines-only", "v 0 0 0\nv 1 0 0\nl 1 2\n")]
+    for (name, text) in
+        [("empty", ""), ("comments", "# nothing\nv 1 2 3\n"), ("lines-only", "v 0 0 0\nv 1 0 0\nl 1 2\n")]
     {
         let e = load_text(name, text).unwrap_err();
         assert!(matches!(e, SceneLoadError::NoTriangles { .. }), "{name}: {e}");

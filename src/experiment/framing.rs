@@ -77,14 +77,17 @@ mod tests {
         for p in &mut mesh.positions {
             *p += offset;
         }
-        Scene { objects: vec![SceneObject { name: "m".into(), mesh, role: Role::CasterAndReceiver, albedo: Vec3::ONE }] }
+        Scene {
+            objects: vec![SceneObject { name: "m".into(), mesh, role: Role::CasterAndReceiver, albedo: Vec3::ONE }],
+        }
     }
 
     /// Every vertex of the model projects inside the screen and in front of
     /// the eye, at any size and position; the model is not a speck.
     #[test]
     fn model_is_inside_the_view_and_fills_it() {
-        for (offset, size) in [(Vec3::ZERO, 1.0), (Vec3::new(0.0, -1000.0, 0.0), 5.0), (Vec3::new(1e6, 0.0, 1e6), 1e-3)] {
+        for (offset, size) in [(Vec3::ZERO, 1.0), (Vec3::new(0.0, -1000.0, 0.0), 5.0), (Vec3::new(1e6, 0.0, 1e6), 1e-3)]
+        {
             let scene = scene_at(offset, size);
             let fov = 60f64.to_radians();
             let f = frame_model(&scene, None, None, fov);

@@ -10,10 +10,10 @@
 
 use std::path::{Path, PathBuf};
 
-use base64::Engine as _;
-use glam::{Mat3, Mat4, Vec3};
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::Mode;
+use base64::Engine as _;
+use glam::{Mat3, Mat4, Vec3};
 
 use super::load::{RawObject, RawScene, Repair, SceneLoadError};
 
@@ -159,13 +159,15 @@ fn push_mesh<'a>(instances: &mut Vec<Instance<'a>>, mesh: &::gltf::Mesh<'a>, tra
 
 /// Vertices the primitive's index list (or vertex list) names.
 fn index_count(primitive: &::gltf::Primitive) -> usize {
-    primitive
-        .indices()
-        .or_else(|| primitive.get(&::gltf::Semantic::Positions))
-        .map_or(0, |a| a.count())
+    primitive.indices().or_else(|| primitive.get(&::gltf::Semantic::Positions)).map_or(0, |a| a.count())
 }
 
-fn check_vec3(accessor: &::gltf::Accessor, instance: &Instance, attribute: &'static str, path: &Path) -> Result<(), GltfError> {
+fn check_vec3(
+    accessor: &::gltf::Accessor,
+    instance: &Instance,
+    attribute: &'static str,
+    path: &Path,
+) -> Result<(), GltfError> {
     if accessor.data_type() == DataType::F32 && accessor.dimensions() == Dimensions::Vec3 {
         return Ok(());
     }
@@ -199,7 +201,13 @@ fn read_primitive(instance: &Instance, buffers: &[Vec<u8>], path: &Path) -> Resu
     };
     let mut indices = match primitive.mode() {
         Mode::TriangleStrip => (2..list.len())
-            .flat_map(|i| if i % 2 == 0 { [list[i - 2], list[i - 1], list[i]] } else { [list[i - 1], list[i - 2], list[i]] })
+            .flat_map(|i| {
+                if i % 2 == 0 {
+                    [list[i - 2], list[i - 1], list[i]]
+                } else {
+                    [list[i - 1], list[i - 2], list[i]]
+                }
+            })
             .collect(),
         Mode::TriangleFan => (2..list.len()).flat_map(|i| [list[0], list[i - 1], list[i]]).collect(),
         _ => list,

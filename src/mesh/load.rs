@@ -308,10 +308,7 @@ impl fmt::Display for LoadReport {
 ///
 /// # Errors
 /// [`SceneLoadError`] naming the file and what is wrong.
-pub fn load_scene_file(
-    path: impl AsRef<Path>,
-    options: &SceneOptions,
-) -> Result<(Scene, LoadReport), SceneLoadError> {
+pub fn load_scene_file(path: impl AsRef<Path>, options: &SceneOptions) -> Result<(Scene, LoadReport), SceneLoadError> {
     let path = path.as_ref();
     if !(options.scale > 0.0 && options.scale.is_finite()) {
         return Err(SceneLoadError::InvalidScale { scale: options.scale });
