@@ -129,13 +129,7 @@ pub(crate) fn read_obj(text: &str, path: &Path) -> Result<RawScene, ObjError> {
         non_triangles += usize::from(n < 3);
     }
     non_triangles += text.lines().filter(|l| matches!(l.split_whitespace().next(), Some("l" | "p"))).count();
-    let options = tobj::LoadOptions {
-        single_index: true,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
-    };
+    let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
     let (models, _materials) =
         tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
             .map_err(|source| ObjError::Parse { path: path.into(), source })?;
