@@ -76,7 +76,12 @@ impl Camera {
         let aspect = f64::from(viewport.x) / f64::from(viewport.y);
         let view_from_world = glam::dcamera::rh::view::look_at_mat4(eye, target, up);
         let clip_from_view = glam::dcamera::rh::proj::directx::perspective(fov_y_radians, aspect, z_near, z_far);
-        Self::from_matrices_with(view_from_world, clip_from_view, viewport, &ProjectionHints::clip_depth(ClipDepth::ZeroToOne))
+        Self::from_matrices_with(
+            view_from_world,
+            clip_from_view,
+            viewport,
+            &ProjectionHints::clip_depth(ClipDepth::ZeroToOne),
+        )
     }
 
     /// A camera from an engine's own matrices, whatever their convention.
@@ -253,9 +258,8 @@ impl Camera {
     /// `min(z_far, max_depth)` (never nearer than just beyond the near plane).
     #[must_use]
     pub fn frustum_corners_to(&self, max_depth: f64) -> [DVec3; 8] {
-        let span = (self.z_far.min(1e300) - self.z_near).abs().max(self.z_near.abs()).max(f64::MIN_POSITIVE);
         let far = if max_depth < self.z_far { max_depth } else { self.z_far };
-        let far = far.max(self.z_near + 1e-9 * span);
+        let far = far.max(self.z_near + 1e-9 * far.abs().max(self.z_near.abs()).max(f64::MIN_POSITIVE));
         let far_ndc = self.depth_at_distance(far);
         // Unproject in view space first, then apply the rigid inverse: going
         // through the inverse of the full clip_from_world loses about

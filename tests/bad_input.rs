@@ -87,14 +87,23 @@ fn bad_planes_and_readbacks_are_rejected() {
     ));
     let depth = vec![0.5f32; 16];
     let bits = vec![0u32; 15];
-    let short = Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None, layout: Default::default() };
+    let short =
+        Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None, layout: Default::default() };
     assert!(Samples::from_readback(&p, &short, 0, &SampleOptions::default()).is_err());
     let bits = vec![0u32; 16];
-    let fine = Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None, layout: Default::default() };
+    let fine =
+        Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None, layout: Default::default() };
     assert!(Samples::from_readback(&p, &fine, 32, &SampleOptions::default()).is_err());
     // A readback of NaN depths is not an error: it simply has no samples.
     let nan_depth = vec![f32::NAN; 16];
-    let nans = Readback { width: 4, height: 4, depth: &nan_depth, shadow_bits: &bits, normals: None, layout: Default::default() };
+    let nans = Readback {
+        width: 4,
+        height: 4,
+        depth: &nan_depth,
+        shadow_bits: &bits,
+        normals: None,
+        layout: Default::default(),
+    };
     let samples = Samples::from_readback(&p, &nans, 0, &SampleOptions::default()).unwrap();
     assert_eq!(samples.relevant_count(), 0);
     let result = lixel::optimize_light_matrix(&samples, None).unwrap();

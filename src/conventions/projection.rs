@@ -68,7 +68,12 @@ fn invalid(property: CameraProperty, reason: &'static str) -> LixelError {
 
 /// Near and far distances of one reading `[lo, hi]`, or `None` when it is not
 /// a valid camera. `depth` is the engine's `z(d)`.
-fn reading(depth: SourceDepth, direction: DepthDirection, (lo, hi): (f64, f64), infinite_tol: f64) -> Option<(f64, f64)> {
+fn reading(
+    depth: SourceDepth,
+    direction: DepthDirection,
+    (lo, hi): (f64, f64),
+    infinite_tol: f64,
+) -> Option<(f64, f64)> {
     let (z_near, z_far) = match direction {
         DepthDirection::Forward => (lo, hi),
         DepthDirection::Reverse => (hi, lo),

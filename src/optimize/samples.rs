@@ -543,7 +543,8 @@ fn plane_derivatives(
     // Move one pixel along x (or y) and intersect that pixel's ray with the plane.
     let hit = |px: f64, py: f64| -> Option<DVec3> {
         let a = world_from_screen.project_point3(DVec3::new(px, py, 0.0));
-        let b = world_from_screen.project_point3(DVec3::new(px, py, 1.0));
+        // Depth 0.5, not 1: an infinite far plane's depth 1 is at infinity.
+        let b = world_from_screen.project_point3(DVec3::new(px, py, 0.5));
         let denom = normal.dot(b - a);
         if denom.abs() <= f64::EPSILON * (b - a).length() {
             return None;
