@@ -229,6 +229,7 @@ fn random_source(builder: usize, rng: &mut ChaCha8Rng) -> Source {
     let (l, r, b, t) = (shift.x - half_w, shift.x + half_w, shift.y - half_h, shift.y + half_h);
     let ortho_h = rng.random_range(3.0..20.0);
     let ortho_near = rng.random_range(-5.0..1.0);
+    let ortho_far = far.max(ortho_near + 1.0);
     let (ol, or, ob, ot) = (-ortho_h * aspect, ortho_h * aspect, -ortho_h, ortho_h);
     let rh_view = dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
     let lh_view = dcamera::lh::view::look_at_mat4(eye, target, DVec3::Y);
@@ -259,8 +260,8 @@ fn random_source(builder: usize, rng: &mut ChaCha8Rng) -> Source {
         ),
         2 => (
             rh_view,
-            dcamera::rh::proj::opengl::orthographic(ol, or, ob, ot, ortho_near, far),
-            truth(O, Gl, Forward, false, right, up, ortho_near, far),
+            dcamera::rh::proj::opengl::orthographic(ol, or, ob, ot, ortho_near, ortho_far),
+            truth(O, Gl, Forward, false, right, up, ortho_near, ortho_far),
         ),
         3 => (
             rh_view,
@@ -309,8 +310,8 @@ fn random_source(builder: usize, rng: &mut ChaCha8Rng) -> Source {
         ),
         _ => (
             lh_view,
-            dcamera::lh::proj::directx::orthographic(ol, or, ob, ot, ortho_near, far),
-            truth(O, Zo, Forward, false, left, up, ortho_near, far),
+            dcamera::lh::proj::directx::orthographic(ol, or, ob, ot, ortho_near, ortho_far),
+            truth(O, Zo, Forward, false, left, up, ortho_near, ortho_far),
         ),
     };
     Source { name: BUILDERS[builder], view, proj, viewport, truth: t }
@@ -857,4 +858,36 @@ fn orthographic_camera_psm_and_lispsm_reduce_to_focused() {
             assert!((m.clip_from_world - focused.clip_from_world).abs().to_cols_array().iter().all(|v| *v < 1e-12));
         }
     }
+}
+
+/// Issue 13's report as a regression: random OpenGL cameras looking at the
+/// receiver box. Read as `[0, 1]` (the old reading, now only when stated)
+/// some focused and LiSPSM maps miss receivers between the real near plane
+/// and `2fn/(f+n)`; read as lixel infers it, none do.
+#[test]
+fn gl_cameras_lose_no_receivers() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2000);
+    let (mut misread, mut inferred) = (0, 0);
+    for _ in 0..2000 {
+        let source = random_source(0, &mut rng);
+        let r = scene().receivers;
+        let points: Vec<DVec3> = (0..300)
+            .map(|_| r.min + (r.max - r.min) * DVec3::new(rng.random(), rng.random(), rng.random()))
+            .filter(|&p| source.sees(p))
+            .collect();
+        for (hints, misses) in [
+            (ProjectionHints::clip_depth(ClipDepth::ZeroToOne), &mut misread),
+            (ProjectionHints::default(), &mut inferred),
+        ] {
+            let camera = Camera::from_matrices_with(source.view, source.proj, source.viewport, &hints).unwrap();
+            let problem = ShadowProblem::new(camera, lights()[0], scene(), ShadowMapSize::square(1024)).unwrap();
+            for method in [Parameterization::Focused, Parameterization::LiSpsm(Default::default())] {
+                let ok = problem.solve(&method).is_ok_and(|m| points.iter().all(|&p| m.covers(p, 1e-6)));
+                *misses += usize::from(!ok);
+            }
+        }
+    }
+    eprintln!("2000 GL cameras: maps missing visible receivers: {misread} read as [0, 1], {inferred} as inferred");
+    assert!(misread > 0, "the old reading should lose receivers here");
+    assert_eq!(inferred, 0);
 }
