@@ -8,7 +8,9 @@
 // becomes the light's shadow bit in the masks and the analysis readback.
 
 // One layer per shadow-pass slot (`light.layer`), as large as the largest map.
-@group(1) @binding(0) var shadow_maps: texture_depth_2d_array;
+// Depth textures are bound as unfilterable float textures: naga cannot
+// translate `textureLoad` from a depth texture to GLSL (the GL backend).
+@group(1) @binding(0) var shadow_maps: texture_2d_array<f32>;
 
 // Hard shadow test of `world` against the light's map. Points outside the
 // map, or behind the light's image plane, count as lit.
@@ -28,7 +30,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let texel = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size;
     let size = vec2<i32>(light.map_size);
     let coords = clamp(vec2<i32>(floor(texel)), vec2<i32>(0), size - vec2<i32>(1));
-    let stored = textureLoad(shadow_maps, coords, light.layer, 0);
+    let stored = textureLoad(shadow_maps, coords, light.layer, 0).x;
     // Linear light depth, as the shadow pass stored it (see shadow.wgsl);
     // receivers beyond the far end compare as at it.
     let depth = clamp(linear_light_depth(light.position, light.depth.xy, world), 0.0, 1.0);

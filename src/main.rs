@@ -5,12 +5,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 use glam::{DVec3, UVec2};
 use lixel::experiment::{
     self, ExperimentConfig, LightKind, MethodKind, Preset, Progress, SceneSource, TimingOptions, Truth,
 };
-use lixel::render::Renderer;
+use lixel::mesh::{SceneOptions, UpAxis};
+use lixel::render::Gpu;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
@@ -44,13 +45,24 @@ struct ExperimentArgs {
     /// Light kind.
     #[arg(long, value_enum)]
     light: Option<LightKind>,
-    /// An OBJ file instead of the built-in scene.
+    /// A scene file (.obj, .gltf, .glb) instead of the built-in scene; the
+    /// default camera frames it and a floor under it receives its shadows.
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// The --scene file's up axis (z: converted to the y-up world).
+    #[arg(long, value_enum, default_value = "y")]
+    up: UpAxis,
+    /// Uniform scale applied to the --scene file.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// No floor under the --scene model.
+    #[arg(long)]
+    no_floor: bool,
     /// Triangle budget of the built-in scene.
     #[arg(long)]
     triangles: Option<usize>,
-    /// Eye position x,y,z (default: a little above the floor at the scene's edge).
+    /// Eye position x,y,z (default: built-in scene a little above the floor at
+    /// its edge; --scene model from the front, 25° up, whole model in view).
     #[arg(long, value_parser = parse_vec3)]
     eye: Option<DVec3>,
     /// Look-at point x,y,z (default: the scene centre).
@@ -107,6 +119,19 @@ struct ExperimentArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// wgpu backend: auto (Vulkan, else GL; `WGPU_BACKEND` when set), vulkan or gl.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// `WGPU_BACKEND` when set, else Vulkan (lavapipe without a GPU), else GL (llvmpipe).
+    Auto,
+    /// Vulkan only.
+    Vulkan,
+    /// OpenGL (ES) through EGL only.
+    Gl,
 }
 
 #[derive(clap::Args)]
@@ -138,7 +163,8 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     let mut c = ExperimentConfig::preset(args.preset);
     c.light = args.light.unwrap_or(c.light);
     if let Some(path) = &args.scene {
-        c.scene = SceneSource::Obj(path.clone());
+        let options = SceneOptions { up: args.up, scale: args.scale, floor: !args.no_floor };
+        c.scene = SceneSource::File { path: path.clone(), options };
     } else if let Some(t) = args.triangles {
         c.scene = SceneSource::Builtin { triangles: t };
     }
@@ -164,26 +190,53 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     Ok(c)
 }
 
-/// A device and queue from the system's adapter (lavapipe on machines without a GPU).
-fn gpu() -> Result<(wgpu::Device, wgpu::Queue), String> {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-        .map_err(|e| format!("no GPU adapter ({e}); on Debian install mesa-vulkan-drivers"))?;
-    let mut limits = wgpu::Limits::default();
-    // The focused 4000² truth needs more than the default 8192 texture limit allows... and room.
-    limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
-    pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("lixel"),
-        required_features: adapter.features() & Renderer::optional_features(),
-        required_limits: limits,
-        ..Default::default()
-    }))
-    .map_err(|e| format!("cannot open the GPU device: {e}"))
+/// A device on the chosen backend (lavapipe or llvmpipe on machines without a GPU).
+fn gpu(backend: BackendArg) -> Result<Gpu, String> {
+    let backends = match backend {
+        BackendArg::Auto => None,
+        BackendArg::Vulkan => Some(wgpu::Backends::VULKAN),
+        BackendArg::Gl => Some(wgpu::Backends::GL),
+    };
+    Gpu::open(backends, "lixel").map_err(|e| e.to_string())
+}
+
+/// Mesa's Vulkan and EGL drivers print "error: XDG_RUNTIME_DIR is invalid or
+/// not set" when the variable is missing, which reads like a failure on a
+/// healthy run. Without one, give them a private directory (mode 0700, as
+/// the spec asks). Called before any wgpu call, while single-threaded.
+fn ensure_runtime_dir() {
+    let valid = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if valid {
+        return;
+    }
+    let user = std::env::var("USER").unwrap_or_else(|_| "user".into());
+    let dir = std::env::temp_dir().join(format!("lixel-runtime-{user}"));
+    if std::fs::create_dir_all(&dir).is_err() {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        if std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).is_err() {
+            return;
+        }
+    }
+    std::env::set_var("XDG_RUNTIME_DIR", &dir);
 }
 
 fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let config = experiment_config(args)?;
-    let (device, queue) = gpu()?;
+    if let SceneSource::File { path, .. } = &config.scene {
+        // Loads the file once more than the run does: cheap next to the run,
+        // and errors show before the device starts.
+        let (_, report) = experiment::load_scene_with_report(&config.scene).map_err(|e| e.to_string())?;
+        if let Some(report) = report {
+            eprintln!("scene {}: {report}", path.display());
+        }
+    }
+    let gpu = gpu(args.backend)?;
+    let (device, queue) = (&gpu.device, &gpu.queue);
+    eprintln!("adapter: {}", gpu.describe());
     if args.timing {
         let options = TimingOptions {
             frames: args.timing_frames,
@@ -211,7 +264,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
                 );
             }
         };
-        let rows = experiment::run_timing(&config, &options, &device, &queue, progress).map_err(|e| e.to_string())?;
+        let rows = experiment::run_timing(&config, &options, device, queue, progress).map_err(|e| e.to_string())?;
         let table = experiment::timing_markdown(&rows);
         std::fs::create_dir_all(&config.out).map_err(|e| e.to_string())?;
         let path = config.out.join("timing.md");
@@ -234,7 +287,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             bar.set_position(p.done as u64);
         }
     };
-    let summary = experiment::run(&config, &device, &queue, &mut progress).map_err(|e| e.to_string())?;
+    let summary = experiment::run(&config, device, queue, &mut progress).map_err(|e| e.to_string())?;
     if let Some(bar) = bar {
         bar.finish();
     }
@@ -292,6 +345,7 @@ fn run_methods(args: &MethodsArgs) -> Result<(), String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    ensure_runtime_dir();
     let result = match &cli.command {
         Command::Experiment(args) => run_experiment(args),
         Command::Methods(args) => run_methods(args),

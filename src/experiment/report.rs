@@ -219,6 +219,8 @@ pub struct Summary {
     pub ladder: Vec<(u32, f64)>,
     /// Wall time of the run.
     pub elapsed: Duration,
+    /// The adapter and backend it ran on (e.g. `llvmpipe (...) (vulkan)`).
+    pub adapter: String,
 }
 
 /// The resolution-equivalence figures (empty when disabled).
@@ -329,7 +331,15 @@ pub(super) fn summarize(
         }
     }
     let truth_agreement = (compared > 0).then(|| 1.0 - disagree as f64 / compared as f64);
-    Summary { methods, worst, truth_agreement, equivalence: equivalence.0, ladder: equivalence.1, elapsed }
+    Summary {
+        methods,
+        worst,
+        truth_agreement,
+        equivalence: equivalence.0,
+        ladder: equivalence.1,
+        elapsed,
+        adapter: String::new(),
+    }
 }
 
 fn write(path: &Path, text: &str) -> Result<(), ExperimentError> {
@@ -388,6 +398,9 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
         config.truth,
         summary.elapsed.as_secs_f64()
     );
+    if !summary.adapter.is_empty() {
+        let _ = writeln!(md, "Rendered on {}.\n", summary.adapter);
+    }
     let _ = writeln!(
         md,
         "Mean misclassified pixels per configuration (lower is better); rows as in the paper's Table 1.\n"

@@ -96,7 +96,9 @@ impl LookupState {
         unclipped_available: bool,
     ) -> Self {
         let spec = lookup.spec();
-        let mut entries = vec![map_entry(0, wgpu::TextureSampleType::Depth)];
+        // Depth bound as unfilterable float: naga cannot translate
+        // `textureLoad` from a `texture_depth_*` to GLSL (the GL backend).
+        let mut entries = vec![map_entry(0, wgpu::TextureSampleType::Float { filterable: false })];
         if let Some(format) = spec.map_color {
             let sample_type = format.sample_type(None, None).unwrap_or(wgpu::TextureSampleType::Uint);
             entries.push(map_entry(1, sample_type));
@@ -295,7 +297,7 @@ impl ShadowPass {
 /// largest map (each map uses the top-left `width x height` texels of its
 /// layer), and the group-1 bind group of the camera and analysis passes.
 pub(crate) struct ShadowMaps {
-    pub(crate) depth: wgpu::Texture,
+    pub(crate) depth_array: wgpu::TextureView,
     pub(crate) depth_layers: Vec<wgpu::TextureView>,
     pub(crate) color_layers: Vec<wgpu::TextureView>,
     pub(crate) bind_group: wgpu::BindGroup,
@@ -312,6 +314,9 @@ impl ShadowMaps {
         height: u32,
         layers: u32,
     ) -> Self {
+        // At least two layers: the GL backend makes a one-layer texture a
+        // plain 2D texture, which then reads as zero through the array view.
+        let layers = layers.max(2);
         let array = |label: &str, format| {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -341,13 +346,13 @@ impl ShadowMaps {
                     })
                 })
                 .collect::<Vec<_>>();
-            (texture, array_view, layer_views)
+            (array_view, layer_views)
         };
-        let (depth, depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
+        let (depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
         let color = color.map(|format| array("lixel shadow map words", format));
         let mut entries =
             vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&depth_array) }];
-        if let Some((_, view, _)) = &color {
+        if let Some((view, _)) = &color {
             entries.push(wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) });
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -355,8 +360,8 @@ impl ShadowMaps {
             layout,
             entries: &entries,
         });
-        let color_layers = color.map(|(_, _, layers)| layers).unwrap_or_default();
-        Self { depth, depth_layers, color_layers, bind_group, width, height }
+        let color_layers = color.map(|(_, layers)| layers).unwrap_or_default();
+        Self { depth_array, depth_layers, color_layers, bind_group, width, height }
     }
 
     pub(crate) fn layers(&self) -> u32 {

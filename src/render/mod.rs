@@ -36,6 +36,8 @@
 
 mod analysis;
 mod culling;
+mod depth_copy;
+pub mod device;
 mod encode;
 mod frame_loop;
 mod lookup;
@@ -55,6 +57,7 @@ use crate::mesh::{MeshError, Scene};
 use crate::{Camera, LightMatrix};
 
 pub use analysis::{AnalysisMeta, AnalysisReadback};
+pub use device::Gpu;
 pub use frame_loop::{LoopError, LoopFrame, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Settled, ShadowLoop};
 pub use lookup::ShadowLookup;
 pub use options::{AnalysisSource, RendererOptions, ShadowBias, ShadowFaces};
@@ -127,6 +130,29 @@ pub enum RenderError {
     /// Waiting for the device failed (device lost, timeout).
     #[error("device poll failed: {0}")]
     Poll(#[from] wgpu::PollError),
+    /// No backend offered an adapter ([`Gpu::open`]).
+    #[error(
+        "no GPU adapter ({tried}); install mesa-vulkan-drivers (Vulkan through lavapipe) or libegl-mesa0 (GL through \
+         llvmpipe)"
+    )]
+    NoAdapter {
+        /// Each backend tried and why it failed.
+        tried: String,
+    },
+    /// The device reported a validation, out-of-memory or internal error.
+    #[error("{pass} failed on {backend} adapter {adapter:?}: {message}{}", hint.map(|h| format!(" (hint: {h})")).unwrap_or_default())]
+    Device {
+        /// The wgpu backend (`vulkan`, `gl`, ...).
+        backend: String,
+        /// The adapter's name.
+        adapter: String,
+        /// What the renderer was doing.
+        pass: &'static str,
+        /// wgpu's description of the error.
+        message: String,
+        /// What might help, where known.
+        hint: Option<&'static str>,
+    },
 }
 
 /// An analysis pass to render this frame.
@@ -241,6 +267,10 @@ pub struct Renderer {
     analysis_depth: Option<Target>,
     ring: ReadbackRing<AnalysisMeta>,
     timer: Option<GpuTimer>,
+    /// Device errors no scope caught (wgpu would otherwise panic).
+    errors: device::DeviceErrors,
+    /// Built on the first [`Renderer::read_shadow_map`].
+    depth_copy: std::sync::OnceLock<depth_copy::DepthCopy>,
     frame: u64,
     /// Lights of the last frame (for reading maps back).
     last_lights: Vec<LightMatrix>,
@@ -282,6 +312,7 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Self, RenderError> {
         scene.validate()?;
+        let errors = device::DeviceErrors::install(device);
         let max_texture = device.limits().max_texture_dimension_2d;
         let (aw, ah) = options.analysis_size;
         check_target(aw, ah, max_texture)?;
@@ -310,7 +341,7 @@ impl Renderer {
             }));
             indices.extend(object.mesh.indices.iter().map(|i| i + base));
         }
-        let gpu_scene = GpuScene {
+        let gpu_scene = device::capture(device, "scene upload", || GpuScene {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
@@ -323,7 +354,7 @@ impl Renderer {
             }),
             index_count: indices.len() as u32,
             objects,
-        };
+        })?;
         let camera_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lixel camera uniforms"),
             size: std::mem::size_of::<CameraRaw>() as u64,
@@ -338,7 +369,7 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         };
-        let layouts = SceneLayouts::new(device);
+        let layouts = device::capture(device, "camera and analysis layouts", || SceneLayouts::new(device))?;
         let camera_lights = lights_buffer("lixel camera pass lights");
         let camera_bindings = CameraBindings {
             bind_group: device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -353,14 +384,16 @@ impl Renderer {
         };
         // The default lookup is built now, so that the first frame does not
         // pay for its pipelines.
-        let lookups = vec![LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available)];
+        let lookups = vec![device::capture(device, "shadow, camera and analysis pipelines", || {
+            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available)
+        })?];
         let ring = ReadbackRing::new(
             device,
             "lixel analysis readback",
             options.readback_slots,
             analysis::padded_row_bytes(aw) * u64::from(ah),
         );
-        Ok(Self {
+        let renderer = Self {
             device: device.clone(),
             queue: queue.clone(),
             max_texture,
@@ -382,7 +415,17 @@ impl Renderer {
             last_lights: Vec::new(),
             last_lookup: None,
             options,
-        })
+            errors,
+            depth_copy: std::sync::OnceLock::new(),
+        };
+        renderer.errors.take(device, "renderer buffers and targets")?;
+        Ok(renderer)
+    }
+
+    /// The adapter the device was opened on.
+    #[must_use]
+    pub fn adapter_info(&self) -> wgpu::AdapterInfo {
+        self.device.adapter_info()
     }
 
     /// The options it was created with.
@@ -429,6 +472,7 @@ impl Renderer {
     /// for bad input; nothing is rendered then.
     pub fn render(&mut self, frame: &Frame<'_>) -> Result<FrameReport, RenderError> {
         let started = Instant::now();
+        self.errors.take(&self.device, "an earlier device call")?;
         let slots = self.prepare(frame)?;
         self.write_uniforms(frame, &slots);
 
@@ -457,6 +501,7 @@ impl Renderer {
             timer.resolve(&mut encoder, t);
         }
         let submission = self.queue.submit([encoder.finish()]);
+        self.errors.take(&self.device, "rendering a frame")?;
 
         let analysis_slot = analysis_staging.map(|(slot, _)| slot);
         if let (Some(slot), Some(request)) = (analysis_slot, frame.analysis) {
@@ -509,18 +554,21 @@ impl Renderer {
             }
         }
         debug_assert!(maps.len() <= MAX_SHADOW_SLOTS);
-        let lookup = self.lookup_state(frame.lookup);
+        let lookup = self.lookup_state(frame.lookup)?;
         self.ensure_resources(lookup, &maps, viewport.x, viewport.y);
         Ok(MapSlots { maps, analysis_layers, lookup })
     }
 
     /// The index of `lookup`'s pipelines and maps, built on first use.
-    fn lookup_state(&mut self, lookup: ShadowLookup) -> usize {
+    fn lookup_state(&mut self, lookup: ShadowLookup) -> Result<usize, RenderError> {
         if let Some(i) = self.lookups.iter().position(|s| s.lookup == lookup) {
-            return i;
+            return Ok(i);
         }
-        self.lookups.push(LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available));
-        self.lookups.len() - 1
+        let state = device::capture(&self.device, "shadow, camera and analysis pipelines", || {
+            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available)
+        })?;
+        self.lookups.push(state);
+        Ok(self.lookups.len() - 1)
     }
 
     /// Camera, lights of both scene passes and the shadow passes' slots.
