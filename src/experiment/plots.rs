@@ -77,7 +77,9 @@ pub(super) fn sorted_errors(path: &Path, config: &ExperimentConfig, rows: &[Conf
         })
         .collect();
     let longest = series.iter().map(|(_, v)| v.len()).max().unwrap_or(0).max(2);
-    let top = series.iter().flat_map(|(_, v)| v.iter().copied()).max().unwrap_or(1).max(1) as f64 + 1.0;
+    let all = || series.iter().flat_map(|(_, v)| v.iter().copied());
+    let top = all().max().unwrap_or(1).max(1) as f64 + 1.0;
+    let bottom = ((all().min().unwrap_or(0) as f64 + 1.0) / 1.5).max(1.0).min(top / 2.0);
     draw(path, |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         let mut chart = ChartBuilder::on(root)
@@ -85,19 +87,21 @@ pub(super) fn sorted_errors(path: &Path, config: &ExperimentConfig, rows: &[Conf
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(80)
-            .build_cartesian_2d(0f64..(longest - 1) as f64, (1f64..top * 1.5).log_scale())
+            .build_cartesian_2d(1i32..i32::try_from(longest).unwrap_or(i32::MAX), (bottom..top * 1.5).log_scale())
             .map_err(e)?;
         chart
             .configure_mesh()
-            .x_desc("configurations, ranked by this method's error")
+            .x_desc("rank of the configuration by this method's error (1 = best)")
             .y_desc("1 + misclassified pixels")
+            .x_labels(longest.min(12))
+            .y_label_formatter(&|y| format!("{y:.0}"))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(e)?;
         for (m, v) in &series {
             let c = color(*m);
-            let points = v.iter().enumerate().map(|(i, &p)| (i as f64, p as f64 + 1.0));
+            let points = v.iter().enumerate().map(|(i, &p)| (i32::try_from(i + 1).unwrap_or(i32::MAX), p as f64 + 1.0));
             chart
                 .draw_series(LineSeries::new(points, c.stroke_width(2)))
                 .map_err(e)?
@@ -106,7 +110,7 @@ pub(super) fn sorted_errors(path: &Path, config: &ExperimentConfig, rows: &[Conf
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(SeriesLabelPosition::LowerRight)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
@@ -115,8 +119,8 @@ pub(super) fn sorted_errors(path: &Path, config: &ExperimentConfig, rows: &[Conf
     })
 }
 
-/// `equivalence.png`: the focused ladder's mean error against its map
-/// size (log-log), and each scene-optimized measurement with the focused
+/// `equivalence.png`: the focused ladder's mean error (logarithmic)
+/// against its map size, and each scene-optimized measurement with the focused
 /// size that reaches the same mean error.
 pub(super) fn equivalence(path: &Path, summary: &Summary) -> Result<(), ExperimentError> {
     let sizes =
@@ -126,7 +130,7 @@ pub(super) fn equivalence(path: &Path, summary: &Summary) -> Result<(), Experime
     let (y0, y1) =
         errors.filter(|e| e.is_finite() && *e > 0.0).fold((f64::INFINITY, 0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
     let (y0, y1) = if y0 <= y1 { (y0 / 1.5, y1 * 1.5) } else { (0.1, 10.0) };
-    let (x0, x1) = if x0 < x1 { (x0 / 1.2, x1 * 1.2) } else { (100.0, 5000.0) };
+    let (x0, x1) = if x0 < x1 { (0.0, x1 * 1.05) } else { (0.0, 5000.0) };
     draw(path, |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         let mut chart = ChartBuilder::on(root)
@@ -134,12 +138,15 @@ pub(super) fn equivalence(path: &Path, summary: &Summary) -> Result<(), Experime
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
             .map_err(e)?;
         chart
             .configure_mesh()
             .x_desc("shadow-map size (pixels per side)")
             .y_desc("mean misclassified pixels")
+            .x_labels(10)
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&|y| format!("{y:.0}"))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()

@@ -320,3 +320,30 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
     }
     md
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::Preset;
+    use super::*;
+
+    #[test]
+    fn the_equivalence_heading_gives_the_configurations_actually_used() {
+        let config =
+            ExperimentConfig { configs: 6, equivalence_configs: 100_000, ..ExperimentConfig::preset(Preset::Quick) };
+        let summary = Summary {
+            methods: Vec::new(),
+            worst: Vec::new(),
+            truth_agreement: None,
+            equivalence: vec![(400, 10.0, None)],
+            ladder: vec![(256, 20.0)],
+            elapsed: Duration::ZERO,
+            warnings: vec!["a warning".into()],
+            missing: vec![3],
+        };
+        let md = markdown(&config, &summary, &[]);
+        assert!(md.contains("Resolution equivalence (first 6 configurations)"), "{md}");
+        assert!(
+            md.contains("PARTIAL REPORT: 1 of 6 configurations are missing (3)") && md.contains("Warning: a warning")
+        );
+    }
+}
