@@ -12,6 +12,7 @@ use lixel::experiment::{
     self, ExperimentConfig, LightKind, MergeOptions, MethodKind, Preset, Progress, SceneSource, Shard, TimingOptions,
     Truth,
 };
+use lixel::mesh::{SceneOptions, UpAxis};
 use lixel::render::Renderer;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
@@ -52,6 +53,14 @@ enum PresetArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum UpArg {
+    /// +y up (OBJ's usual convention, glTF's rule).
+    Y,
+    /// +z up (CAD tools, many scans).
+    Z,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum LightArg {
     /// Point lights on a distant hemisphere (the paper's setting).
     Point,
@@ -77,13 +86,24 @@ struct ExperimentArgs {
     /// Light kind.
     #[arg(long, value_enum)]
     light: Option<LightArg>,
-    /// An OBJ file instead of the built-in scene.
+    /// A scene file (.obj, .gltf, .glb) instead of the built-in scene; the
+    /// default camera frames it and a floor under it receives its shadows.
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// The --scene file's up axis (z: converted to the y-up world).
+    #[arg(long, value_enum, default_value = "y")]
+    up: UpArg,
+    /// Uniform scale applied to the --scene file.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// No floor under the --scene model.
+    #[arg(long)]
+    no_floor: bool,
     /// Triangle budget of the built-in scene.
     #[arg(long)]
     triangles: Option<usize>,
-    /// Eye position x,y,z (default: a little above the floor at the scene's edge).
+    /// Eye position x,y,z (default: built-in scene a little above the floor at
+    /// its edge; --scene model from the front, 25° up, whole model in view).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<DVec3>,
     /// Look-at point x,y,z (default: the scene centre).
@@ -227,7 +247,12 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
         };
     }
     if let Some(path) = &args.scene {
-        c.scene = SceneSource::Obj(path.clone());
+        let up = match args.up {
+            UpArg::Y => UpAxis::Y,
+            UpArg::Z => UpAxis::Z,
+        };
+        let options = SceneOptions { up, scale: args.scale, floor: !args.no_floor };
+        c.scene = SceneSource::File { path: path.clone(), options };
     } else if let Some(t) = args.triangles {
         c.scene = SceneSource::Builtin { triangles: t };
     }
@@ -283,6 +308,14 @@ fn gpu() -> Result<(wgpu::Device, wgpu::Queue), String> {
 
 fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let config = experiment_config(args)?;
+    if let SceneSource::File { path, .. } = &config.scene {
+        // Loads the file once more than the run does: cheap next to the run,
+        // and errors show before the device starts.
+        let (_, report) = experiment::load_scene_with_report(&config.scene).map_err(|e| e.to_string())?;
+        if let Some(report) = report {
+            eprintln!("scene {}: {report}", path.display());
+        }
+    }
     let (device, queue) = gpu()?;
     if args.timing {
         let options = TimingOptions {

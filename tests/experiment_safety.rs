@@ -13,6 +13,7 @@ use std::process::Command;
 
 use glam::DVec3;
 use lixel::experiment::{self, ExperimentConfig, ExperimentError, MethodKind, Preset, SceneSource, Truth};
+use lixel::mesh::SceneOptions;
 
 fn tiny(out: &Path) -> ExperimentConfig {
     ExperimentConfig {
@@ -114,7 +115,10 @@ fn a_report_is_never_destroyed_and_resume_checks_identity_by_content() {
     std::fs::write(&scene_a, obj(0.0)).unwrap();
     std::fs::write(&scene_b, obj(0.0)).unwrap();
     let obj_out = dir.join("obj");
-    let with = |path: &Path| ExperimentConfig { scene: SceneSource::Obj(path.to_path_buf()), ..tiny(&obj_out) };
+    let with = |path: &Path| ExperimentConfig {
+        scene: SceneSource::File { path: path.to_path_buf(), options: SceneOptions::default() },
+        ..tiny(&obj_out)
+    };
     experiment::run(&ExperimentConfig { configs: 1, ..with(&scene_a) }, &device, &queue, &mut |_| {}).unwrap();
     experiment::run(&ExperimentConfig { resume: true, ..with(&scene_b) }, &device, &queue, &mut |_| {}).unwrap();
     std::fs::write(&scene_a, obj(0.5)).unwrap();

@@ -99,7 +99,7 @@ pub(super) fn check(
     }
     let triangles = match config.scene {
         SceneSource::Builtin { triangles } => triangles as u64,
-        SceneSource::Obj(_) => 0,
+        SceneSource::File { .. } => 0,
     };
     if triangles > MAX_TRIANGLES {
         return Err(ExperimentError::TooLarge {

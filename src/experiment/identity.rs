@@ -32,7 +32,8 @@ pub struct Identity {
     /// `lixel` version that made the run (rows of different versions are
     /// never mixed: the methods or the procedural scene may have changed).
     pub lixel_version: String,
-    /// SHA-256 of the OBJ file (`None` for the built-in scene, which the
+    /// SHA-256 of the scene file, OBJ or glTF (a `.gltf` file's external
+    /// buffers are not hashed; `None` for the built-in scene, which the
     /// version and the triangle budget determine).
     pub scene_sha256: Option<String>,
     /// Every setting of the run (see [`ExperimentConfig`]).
@@ -76,14 +77,14 @@ fn sha256_file(path: &Path) -> Result<String, ExperimentError> {
 }
 
 impl Identity {
-    /// The identity of a run with `config` (reads and hashes the OBJ file).
+    /// The identity of a run with `config` (reads and hashes the scene file).
     ///
     /// # Errors
     /// [`ExperimentError::Io`] when the scene file cannot be read.
     pub fn of(config: &ExperimentConfig) -> Result<Self, ExperimentError> {
         let scene_sha256 = match &config.scene {
             SceneSource::Builtin { .. } => None,
-            SceneSource::Obj(path) => Some(sha256_file(path)?),
+            SceneSource::File { path, .. } => Some(sha256_file(path)?),
         };
         Ok(Self {
             format: FORMAT,
@@ -162,10 +163,13 @@ impl Identity {
             if a == b {
                 continue;
             }
-            let both_obj =
-                matches!((&recorded.settings.scene, &self.settings.scene), (SceneSource::Obj(_), SceneSource::Obj(_)));
+            // Two scene files that differ only in their path (the hashes agree).
+            let only_path = match (&recorded.settings.scene, &self.settings.scene) {
+                (SceneSource::File { options: a, .. }, SceneSource::File { options: b, .. }) => a == b,
+                _ => false,
+            };
             let line = format!("{key} ({}): {a} then {b}", flag(key));
-            if neutral.contains(&key.as_str()) || (key == "scene" && both_obj) {
+            if neutral.contains(&key.as_str()) || (key == "scene" && only_path) {
                 accepted.push(line);
             } else {
                 return Err(differ(&format!("{key} ({})", flag(key)), a.to_string(), b.to_string()));
@@ -220,7 +224,10 @@ mod tests {
         let newer = Identity { lixel_version: "1.0.1".into(), ..old.clone() };
         assert!(newer.check_against(&old, &[], "t").unwrap_err().to_string().contains("lixel version"));
         // OBJ scenes: the path may change, the content may not.
-        let obj = |p: &str| ExperimentConfig { scene: SceneSource::Obj(p.into()), ..quick.clone() };
+        let obj = |p: &str| ExperimentConfig {
+            scene: SceneSource::File { path: p.into(), options: crate::mesh::SceneOptions::default() },
+            ..quick.clone()
+        };
         let a = identity(obj("a.obj"), Some("aa"));
         identity(obj("/abs/a.obj"), Some("aa")).check_against(&a, &[], "t").unwrap();
         let e = identity(obj("a.obj"), Some("bb")).check_against(&a, &[], "t").unwrap_err().to_string();

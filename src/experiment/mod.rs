@@ -16,6 +16,7 @@
 //!    default) serves every method.
 
 mod finish;
+pub mod framing;
 mod guard;
 mod identity;
 mod images;
@@ -32,7 +33,7 @@ use std::time::{Duration, Instant};
 
 use glam::{DVec3, UVec2};
 
-use crate::mesh::{RayCaster, Scene, ShadowMasks};
+use crate::mesh::{LoadReport, RayCaster, Scene, SceneOptions, ShadowMasks};
 use crate::optimize::{OptimizeOptions, Optimizer, SampleOptions, SearchStrategy};
 use crate::render::{AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces};
 use crate::{
@@ -133,8 +134,13 @@ pub enum SceneSource {
         /// Triangle budget.
         triangles: usize,
     },
-    /// An OBJ file.
-    Obj(PathBuf),
+    /// A scene file (OBJ, glTF 2.0) with how to orient, scale and floor it.
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Up axis, scale, floor.
+        options: SceneOptions,
+    },
 }
 
 /// Everything an experiment run depends on. Serialized (without `out`,
@@ -144,9 +150,11 @@ pub enum SceneSource {
 pub struct ExperimentConfig {
     /// The scene.
     pub scene: SceneSource,
-    /// Eye position; `None`: a little above the floor at the scene's edge.
+    /// Eye position; `None`: for the built-in scene a little above the floor
+    /// at the scene's edge, for a file [`framing`] around the model.
     pub eye: Option<DVec3>,
-    /// Look-at point; `None`: the scene centre, slightly above the floor.
+    /// Look-at point; `None`: the scene centre, slightly above the floor
+    /// (built-in scene) or the model's bounding-sphere centre (files).
     pub target: Option<DVec3>,
     /// Vertical field of view in degrees.
     pub fov_y_degrees: f64,
@@ -355,13 +363,23 @@ pub struct Progress {
 /// Loads the configured scene.
 ///
 /// # Errors
-/// [`ExperimentError::Scene`] for an unreadable or invalid OBJ file.
+/// [`ExperimentError::Scene`] for an unreadable or invalid scene file.
 pub fn load_scene(source: &SceneSource) -> Result<Scene, ExperimentError> {
+    Ok(load_scene_with_report(source)?.0)
+}
+
+/// Loads the configured scene and, for a file, says what was loaded.
+///
+/// # Errors
+/// [`ExperimentError::Scene`] for an unreadable or invalid scene file.
+pub fn load_scene_with_report(source: &SceneSource) -> Result<(Scene, Option<LoadReport>), ExperimentError> {
     match source {
         SceneSource::Builtin { triangles } => {
-            Ok(crate::mesh::ProceduralScene { triangle_budget: *triangles, ..Default::default() }.build())
+            Ok((crate::mesh::ProceduralScene { triangle_budget: *triangles, ..Default::default() }.build(), None))
         }
-        SceneSource::Obj(path) => crate::mesh::load_obj(path).map_err(|e| ExperimentError::Scene(e.to_string())),
+        SceneSource::File { path, options } => crate::mesh::load_scene_file(path, options)
+            .map(|(scene, report)| (scene, Some(report)))
+            .map_err(|e| ExperimentError::Scene(e.to_string())),
     }
 }
 
@@ -370,6 +388,18 @@ pub fn load_scene(source: &SceneSource) -> Result<Scene, ExperimentError> {
 /// # Errors
 /// [`ExperimentError::Solver`] for a degenerate camera.
 pub fn camera_for(config: &ExperimentConfig, scene: &Scene) -> Result<Camera, ExperimentError> {
+    if matches!(config.scene, SceneSource::File { .. }) {
+        let f = framing::frame_model(scene, config.eye, config.target, config.fov_y_degrees.to_radians());
+        return Ok(Camera::look_at(
+            f.eye,
+            f.target,
+            DVec3::Y,
+            config.fov_y_degrees.to_radians(),
+            UVec2::splat(config.screen),
+            f.near,
+            f.far,
+        )?);
+    }
     let bounds = scene.bounds().scene();
     let center = bounds.center();
     let extent = bounds.max - bounds.min;

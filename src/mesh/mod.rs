@@ -10,11 +10,15 @@
 //! * [`procedural`]: the built-in test scene of the paper (a few dozen
 //!   objects on or near a floor) at any triangle budget.
 //! * [`obj`]: Wavefront OBJ loading with typed errors.
+//! * [`load`]: users' scene files (OBJ or glTF 2.0, see [`mod@gltf`]) checked,
+//!   repaired, oriented and scaled, with a floor under them if asked for.
 //! * [`raycast`]: a BVH and exact shadow rays, the ground truth for
 //!   shadow tests.
 //! * [`masks`]: per-pixel shadow and light-facing bits, as the renderer reads
 //!   them back and the ray caster traces them.
 
+pub mod gltf;
+pub mod load;
 pub mod masks;
 pub mod obj;
 pub mod primitives;
@@ -23,6 +27,9 @@ pub mod raycast;
 
 use glam::{Affine3A, Vec3};
 
+pub use load::{
+    load_scene_file, LoadReport, Repair, SceneLoadError, SceneOptions, UpAxis, MAX_COORDINATE, MAX_TRIANGLES,
+};
 pub use masks::{MaskAgreement, ShadowMasks};
 pub use obj::{load_obj, ObjError};
 pub use procedural::{default_scene, ProceduralScene};

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::load::{RawObject, RawScene, Repair};
 use super::{Mesh, MeshError, Role, Scene, SceneObject};
 
 /// Why an OBJ file could not be loaded.
@@ -102,6 +103,57 @@ pub fn load_obj_reader(reader: &mut impl BufRead, path: impl AsRef<Path>) -> Res
         return Err(ObjError::NoTriangles { path: path.into() });
     }
     Ok(scene)
+}
+
+/// Triangles the OBJ text's faces make once fan-triangulated (a cheap
+/// scan, so that huge files are refused before they are parsed).
+pub(crate) fn count_triangles(text: &str) -> usize {
+    face_arities(text).map(|n| n.saturating_sub(2)).sum()
+}
+
+/// Vertex counts of the `f` elements.
+fn face_arities(text: &str) -> impl Iterator<Item = usize> + '_ {
+    text.lines().filter_map(|line| {
+        let mut words = line.split_whitespace();
+        (words.next() == Some("f")).then(|| words.count())
+    })
+}
+
+/// Parses OBJ text into raw objects for [`super::load_scene_file`]:
+/// polygons fan-triangulated, point and line elements ignored (both
+/// reported as repairs), normals only where every vertex has one.
+pub(crate) fn read_obj(text: &str, path: &Path) -> Result<RawScene, ObjError> {
+    let (mut polygons, mut non_triangles) = (0, 0);
+    for n in face_arities(text) {
+        polygons += usize::from(n > 3);
+        non_triangles += usize::from(n < 3);
+    }
+    non_triangles += text.lines().filter(|l| matches!(l.split_whitespace().next(), Some("l" | "p"))).count();
+    let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|source| ObjError::Parse { path: path.into(), source })?;
+    let objects = models
+        .into_iter()
+        .map(|model| {
+            let m = model.mesh;
+            let to_vec3 = |v: &[f32]| v.chunks_exact(3).map(Vec3::from_slice).collect::<Vec<_>>();
+            RawObject {
+                name: model.name,
+                normals: (m.normals.len() == m.positions.len()).then(|| to_vec3(&m.normals)),
+                positions: to_vec3(&m.positions),
+                indices: m.indices,
+            }
+        })
+        .collect();
+    let mut repairs = Vec::new();
+    if polygons > 0 {
+        repairs.push(Repair::Triangulated { polygons });
+    }
+    if non_triangles > 0 {
+        repairs.push(Repair::IgnoredNonTriangles { count: non_triangles });
+    }
+    Ok(RawScene { objects, repairs })
 }
 
 #[cfg(test)]
