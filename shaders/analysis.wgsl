@@ -23,7 +23,7 @@
 // Depth goes out as f32 bits in a u32 channel rather than as a float
 // target, so that the pass also runs where R32Float is not renderable (GL).
 
-@group(0) @binding(3) var camera_depth: texture_depth_2d;
+@group(0) @binding(3) var camera_depth: texture_2d<f32>;
 @group(0) @binding(4) var camera_masks: texture_2d<u32>;
 
 @fragment
@@ -43,7 +43,7 @@ fn camera_depth_at(p: vec2<i32>, size: vec2<i32>) -> f32 {
     if any(p < vec2<i32>(0)) || any(p >= size) {
         return 1.0;
     }
-    return textureLoad(camera_depth, p, 0);
+    return textureLoad(camera_depth, p, 0).x;
 }
 
 // Depth change per pixel along one axis, from the side that continues the

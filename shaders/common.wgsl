@@ -51,7 +51,9 @@ struct Lights {
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> lights: Lights;
-@group(0) @binding(2) var shadow_maps: texture_depth_2d_array;
+// Depth textures are bound as unfilterable float textures: naga cannot
+// translate `textureLoad` from a depth texture to GLSL (the GL backend).
+@group(0) @binding(2) var shadow_maps: texture_2d_array<f32>;
 
 struct VertexInput {
     @location(0) position: vec3<f32>,
@@ -106,7 +108,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let texel = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size;
     let size = vec2<i32>(light.map_size);
     let coords = clamp(vec2<i32>(floor(texel)), vec2<i32>(0), size - vec2<i32>(1));
-    let stored = textureLoad(shadow_maps, coords, light.layer, 0);
+    let stored = textureLoad(shadow_maps, coords, light.layer, 0).x;
     // Linear light depth, as the shadow pass stored it (see shadow.wgsl);
     // receivers beyond the far end compare as at it.
     let depth = clamp(linear_light_depth(light.position, light.depth.xy, world), 0.0, 1.0);

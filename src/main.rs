@@ -13,7 +13,7 @@ use lixel::experiment::{
     Truth,
 };
 use lixel::mesh::{SceneOptions, UpAxis};
-use lixel::render::Renderer;
+use lixel::render::Gpu;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
@@ -176,6 +176,19 @@ struct ExperimentArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// wgpu backend: auto (Vulkan, else GL; `WGPU_BACKEND` when set), vulkan or gl.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// `WGPU_BACKEND` when set, else Vulkan (lavapipe without a GPU), else GL (llvmpipe).
+    Auto,
+    /// Vulkan only.
+    Vulkan,
+    /// OpenGL (ES) through EGL only.
+    Gl,
 }
 
 #[derive(clap::Args)]
@@ -289,21 +302,38 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     Ok(c)
 }
 
-/// A device and queue from the system's adapter (lavapipe on machines without a GPU).
-fn gpu() -> Result<(wgpu::Device, wgpu::Queue), String> {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-        .map_err(|e| format!("no GPU adapter ({e}); on Debian install mesa-vulkan-drivers"))?;
-    let mut limits = wgpu::Limits::default();
-    // The focused 4000² truth needs more than the default 8192 texture limit allows... and room.
-    limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
-    pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("lixel"),
-        required_features: adapter.features() & Renderer::optional_features(),
-        required_limits: limits,
-        ..Default::default()
-    }))
-    .map_err(|e| format!("cannot open the GPU device: {e}"))
+/// A device on the chosen backend (lavapipe or llvmpipe on machines without a GPU).
+fn gpu(backend: BackendArg) -> Result<Gpu, String> {
+    let backends = match backend {
+        BackendArg::Auto => None,
+        BackendArg::Vulkan => Some(wgpu::Backends::VULKAN),
+        BackendArg::Gl => Some(wgpu::Backends::GL),
+    };
+    Gpu::open(backends, "lixel").map_err(|e| e.to_string())
+}
+
+/// Mesa's Vulkan and EGL drivers print "error: XDG_RUNTIME_DIR is invalid or
+/// not set" when the variable is missing, which reads like a failure on a
+/// healthy run. Without one, give them a private directory (mode 0700, as
+/// the spec asks). Called before any wgpu call, while single-threaded.
+fn ensure_runtime_dir() {
+    let valid = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if valid {
+        return;
+    }
+    let user = std::env::var("USER").unwrap_or_else(|_| "user".into());
+    let dir = std::env::temp_dir().join(format!("lixel-runtime-{user}"));
+    if std::fs::create_dir_all(&dir).is_err() {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        if std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).is_err() {
+            return;
+        }
+    }
+    std::env::set_var("XDG_RUNTIME_DIR", &dir);
 }
 
 fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
@@ -316,7 +346,9 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             eprintln!("scene {}: {report}", path.display());
         }
     }
-    let (device, queue) = gpu()?;
+    let gpu = gpu(args.backend)?;
+    let (device, queue) = (&gpu.device, &gpu.queue);
+    eprintln!("adapter: {}", gpu.describe());
     if args.timing {
         let options = TimingOptions {
             frames: args.timing_frames,
@@ -344,7 +376,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
                 );
             }
         };
-        let rows = experiment::run_timing(&config, &options, &device, &queue, progress).map_err(|e| e.to_string())?;
+        let rows = experiment::run_timing(&config, &options, device, queue, progress).map_err(|e| e.to_string())?;
         let table = experiment::timing_markdown(&rows);
         std::fs::create_dir_all(&config.out).map_err(|e| e.to_string())?;
         let path = config.out.join("timing.md");
@@ -377,7 +409,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             bar.set_position(p.done as u64);
         }
     };
-    let result = experiment::run(&config, &device, &queue, &mut progress);
+    let result = experiment::run(&config, device, queue, &mut progress);
     if let Some(bar) = bar {
         bar.finish();
     }
@@ -397,9 +429,9 @@ fn print_report(dir: &std::path::Path, summary: &experiment::Summary) {
 }
 
 fn run_merge(args: &MergeArgs) -> Result<(), String> {
-    let (device, queue) = gpu()?;
+    let gpu = gpu(BackendArg::Auto)?;
     let options = MergeOptions { out: args.out.clone(), allow_missing: args.allow_missing, force: args.force };
-    let summary = experiment::merge(&args.dirs, &options, &device, &queue).map_err(|e| e.to_string())?;
+    let summary = experiment::merge(&args.dirs, &options, &gpu.device, &gpu.queue).map_err(|e| e.to_string())?;
     print_report(&args.out, &summary);
     if !summary.missing.is_empty() {
         eprintln!("warning: partial report: {} configurations missing", summary.missing.len());
@@ -455,6 +487,7 @@ fn run_methods(args: &MethodsArgs) -> Result<(), String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    ensure_runtime_dir();
     let result = match &cli.command {
         Command::Experiment(args) => run_experiment(args),
         Command::Merge(args) => run_merge(args),

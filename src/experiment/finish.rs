@@ -19,6 +19,8 @@ pub(super) struct Completeness {
     pub missing: Vec<usize>,
     /// The shard directories merged, when this is a merge.
     pub merged_from: Vec<PathBuf>,
+    /// The adapter and backend the run (or merge) rendered on.
+    pub adapter: String,
 }
 
 /// Fails when no configuration counted a pixel (the camera sees nothing
@@ -62,7 +64,8 @@ pub(super) fn finish(
     started: Instant,
 ) -> Result<Summary, ExperimentError> {
     if config.shard.is_some() {
-        let summary = report::summarize(config, rows, (Vec::new(), Vec::new()), started.elapsed(), warnings);
+        let mut summary = report::summarize(config, rows, (Vec::new(), Vec::new()), started.elapsed(), warnings);
+        summary.adapter.clone_from(&completeness.adapter);
         report::write_shard(dir, config, rows, &summary)?;
         return Ok(summary);
     }
@@ -70,6 +73,7 @@ pub(super) fn finish(
     let pictures = extremes(runner, config, rows)?;
     let mut summary = report::summarize(config, rows, equivalence, started.elapsed(), warnings);
     summary.missing.clone_from(&completeness.missing);
+    summary.adapter.clone_from(&completeness.adapter);
     report::write_all(dir, config, rows, &summary, &pictures, completeness)?;
     Ok(summary)
 }

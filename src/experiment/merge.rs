@@ -97,6 +97,7 @@ pub fn merge(
     let mut warnings = Vec::new();
     finish::check_counted(&rows, &mut warnings)?;
     let mut runner = Runner::new(&config, device, queue)?;
-    let completeness = Completeness { missing, merged_from: dirs.to_vec() };
+    let adapter = crate::render::device::describe(&device.adapter_info());
+    let completeness = Completeness { missing, merged_from: dirs.to_vec(), adapter };
     finish::finish(&mut runner, &config, out.path(), &rows, &completeness, warnings, started)
 }

@@ -823,5 +823,7 @@ pub fn run(
     }
     let rows = writer.rows().to_vec();
     finish::check_counted(&rows, &mut warnings)?;
-    finish::finish(&mut runner, config, dir.path(), &rows, &finish::Completeness::default(), warnings, started)
+    let completeness =
+        finish::Completeness { adapter: crate::render::device::describe(&device.adapter_info()), ..Default::default() };
+    finish::finish(&mut runner, config, dir.path(), &rows, &completeness, warnings, started)
 }

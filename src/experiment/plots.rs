@@ -244,6 +244,7 @@ mod tests {
             elapsed: std::time::Duration::ZERO,
             warnings: Vec::new(),
             missing: Vec::new(),
+            adapter: String::new(),
         };
         let path = dir.join("equivalence.png");
         equivalence(&path, &summary).unwrap();

@@ -55,6 +55,8 @@ pub struct Summary {
     pub warnings: Vec<String>,
     /// Configurations without rows (a merge with `--allow-missing`).
     pub missing: Vec<usize>,
+    /// The adapter and backend it ran on (e.g. `llvmpipe (...) (vulkan)`).
+    pub adapter: String,
 }
 
 /// The resolution-equivalence figures (empty when disabled).
@@ -158,6 +160,7 @@ pub(super) fn summarize(
         elapsed,
         warnings,
         missing: Vec::new(),
+        adapter: String::new(),
     }
 }
 
@@ -261,6 +264,9 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
         serde_json::to_string(&config.truth).unwrap_or_default().trim_matches('"'),
         summary.elapsed.as_secs_f64()
     );
+    if !summary.adapter.is_empty() {
+        let _ = writeln!(md, "Rendered on {}.\n", summary.adapter);
+    }
     let _ = writeln!(
         md,
         "Mean misclassified pixels per configuration (lower is better); rows as in the paper's Table 1.\n"
@@ -339,6 +345,7 @@ mod tests {
             elapsed: Duration::ZERO,
             warnings: vec!["a warning".into()],
             missing: vec![3],
+            adapter: String::new(),
         };
         let md = markdown(&config, &summary, &[]);
         assert!(md.contains("Resolution equivalence (first 6 configurations)"), "{md}");

@@ -52,6 +52,7 @@ pub fn fallback_note(fallback: Fallback) -> String {
         Fallback::PlaneDegenerate => "plane-degenerate".into(),
         Fallback::PlaneNotVisible => "plane-not-visible".into(),
         Fallback::NoUsableSamples => "no-usable-samples".into(),
+        Fallback::OrthographicCamera => "orthographic-camera".into(),
     }
 }
 

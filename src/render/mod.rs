@@ -35,6 +35,8 @@
 
 mod analysis;
 mod culling;
+mod depth_copy;
+pub mod device;
 mod output;
 mod passes;
 pub mod readback;
@@ -50,6 +52,7 @@ use crate::mesh::{MeshError, Scene};
 use crate::{Camera, LightMatrix};
 
 pub use analysis::{AnalysisMeta, AnalysisReadback};
+pub use device::Gpu;
 pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
 pub use timing::GpuFrameTimes;
@@ -117,6 +120,29 @@ pub enum RenderError {
     /// Waiting for the device failed (device lost, timeout).
     #[error("device poll failed: {0}")]
     Poll(#[from] wgpu::PollError),
+    /// No backend offered an adapter ([`Gpu::open`]).
+    #[error(
+        "no GPU adapter ({tried}); install mesa-vulkan-drivers (Vulkan through lavapipe) or libegl-mesa0 (GL through \
+         llvmpipe)"
+    )]
+    NoAdapter {
+        /// Each backend tried and why it failed.
+        tried: String,
+    },
+    /// The device reported a validation, out-of-memory or internal error.
+    #[error("{pass} failed on {backend} adapter {adapter:?}: {message}{}", hint.map(|h| format!(" (hint: {h})")).unwrap_or_default())]
+    Device {
+        /// The wgpu backend (`vulkan`, `gl`, ...).
+        backend: String,
+        /// The adapter's name.
+        adapter: String,
+        /// What the renderer was doing.
+        pass: &'static str,
+        /// wgpu's description of the error.
+        message: String,
+        /// What might help, where known.
+        hint: Option<&'static str>,
+    },
 }
 
 /// The depth bias of every shadow map, the same for every method.
@@ -354,6 +380,10 @@ pub struct Renderer {
     analysis_depth: Option<Target>,
     ring: ReadbackRing<AnalysisMeta>,
     timer: Option<GpuTimer>,
+    /// Device errors no scope caught (wgpu would otherwise panic).
+    errors: device::DeviceErrors,
+    /// Built on the first [`Renderer::read_shadow_map`].
+    depth_copy: std::sync::OnceLock<depth_copy::DepthCopy>,
     frame: u64,
     /// Lights of the last frame (for reading maps back).
     last_lights: Vec<LightMatrix>,
@@ -393,6 +423,7 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Self, RenderError> {
         scene.validate()?;
+        let errors = device::DeviceErrors::install(device);
         let max_texture = device.limits().max_texture_dimension_2d;
         let (aw, ah) = options.analysis_size;
         check_target(aw, ah, max_texture)?;
@@ -421,7 +452,7 @@ impl Renderer {
             }));
             indices.extend(object.mesh.indices.iter().map(|i| i + base));
         }
-        let gpu_scene = GpuScene {
+        let gpu_scene = device::capture(device, "scene upload", || GpuScene {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
@@ -434,7 +465,9 @@ impl Renderer {
             }),
             index_count: indices.len() as u32,
             objects,
-        };
+        })?;
+        let shadow = device::capture(device, "shadow pass pipelines", || ShadowPass::new(device, unclipped_available))?;
+        let passes = device::capture(device, "camera and analysis pipelines", || ScenePasses::new(device))?;
         let camera_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lixel camera uniforms"),
             size: std::mem::size_of::<CameraRaw>() as u64,
@@ -456,14 +489,14 @@ impl Renderer {
             options.readback_slots,
             analysis::padded_row_bytes(aw) * u64::from(ah),
         );
-        Ok(Self {
+        let renderer = Self {
             device: device.clone(),
             queue: queue.clone(),
             max_texture,
             unclipped_available,
             scene: gpu_scene,
-            shadow: ShadowPass::new(device, unclipped_available),
-            passes: ScenePasses::new(device),
+            shadow,
+            passes,
             camera_uniforms,
             camera_bindings: lights_buffer("lixel camera pass lights"),
             analysis_bindings: lights_buffer("lixel analysis pass lights"),
@@ -477,7 +510,17 @@ impl Renderer {
             frame: 0,
             last_lights: Vec::new(),
             options,
-        })
+            errors,
+            depth_copy: std::sync::OnceLock::new(),
+        };
+        renderer.errors.take(device, "renderer buffers and targets")?;
+        Ok(renderer)
+    }
+
+    /// The adapter the device was opened on.
+    #[must_use]
+    pub fn adapter_info(&self) -> wgpu::AdapterInfo {
+        self.device.adapter_info()
     }
 
     /// The options it was created with.
@@ -524,6 +567,7 @@ impl Renderer {
     /// for bad input; nothing is rendered then.
     pub fn render(&mut self, frame: &Frame<'_>) -> Result<FrameReport, RenderError> {
         let started = Instant::now();
+        self.errors.take(&self.device, "an earlier device call")?;
         let analysis_lights = frame.analysis.and_then(|a| a.lights);
         self.validate(frame.lights)?;
         if let Some(lights) = analysis_lights {
@@ -606,6 +650,7 @@ impl Renderer {
             timer.resolve(&mut encoder, t);
         }
         let submission = self.queue.submit([encoder.finish()]);
+        self.errors.take(&self.device, "rendering a frame")?;
 
         if let (Some(slot), Some(request)) = (analysis_slot, frame.analysis) {
             let (w, h) = self.options.analysis_size;

@@ -2,7 +2,8 @@
 //! experiments (never used by the frame loop itself), and shadow-map
 //! visualisation.
 
-use super::{RenderError, Renderer};
+use super::depth_copy::DepthCopy;
+use super::{device, RenderError, Renderer};
 use crate::mesh::ShadowMasks;
 
 /// A shadow map read back: depth per texel, row 0 at the top.
@@ -76,23 +77,33 @@ impl Renderer {
     }
 
     /// Light `light`'s shadow map from the last frame. Blocks until the GPU
-    /// is done. (Copying depth textures is not possible on the GL backend.)
+    /// is done. The depth goes through a colour target (see `depth_copy.rs`),
+    /// so this works on the GL backend too.
     ///
     /// # Errors
-    /// [`RenderError::NoSuchLight`]; mapping or polling failures.
+    /// [`RenderError::NoSuchLight`]; device, mapping or polling failures.
     pub fn read_shadow_map(&self, light: usize) -> Result<DepthImage, RenderError> {
         let matrix =
             self.last_lights.get(light).ok_or(RenderError::NoSuchLight { light, count: self.last_lights.len() })?;
         let (width, height) = (matrix.map_size.width, matrix.map_size.height);
-        let bytes = self.read_texture(
-            &self.shadow_maps.texture,
-            wgpu::TextureAspect::DepthOnly,
-            light as u32,
-            width,
-            height,
-            4,
-        )?;
-        Ok(DepthImage { width, height, depth: bytemuck::cast_slice(&bytes).to_vec() })
+        let copy = match self.depth_copy.get() {
+            Some(copy) => copy,
+            None => {
+                let copy =
+                    device::capture(&self.device, "shadow-map readback pipeline", || DepthCopy::new(&self.device))?;
+                self.depth_copy.get_or_init(|| copy)
+            }
+        };
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel shadow-map readback") });
+        let target = device::capture(&self.device, "shadow-map readback", || {
+            copy.encode(&self.device, &mut encoder, &self.shadow_maps.array_view, light as u32, width, height)
+        })?;
+        self.queue.submit([encoder.finish()]);
+        let bytes = self.read_texture(&target.texture, wgpu::TextureAspect::All, 0, width, height, 4)?;
+        let depth = bytemuck::cast_slice::<u8, u32>(&bytes).iter().map(|&bits| f32::from_bits(bits)).collect();
+        Ok(DepthImage { width, height, depth })
     }
 
     /// Copies the top-left `width x height` texels of one layer into a
@@ -140,6 +151,7 @@ impl Renderer {
             let _ = sender.send(result);
         });
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        self.errors.take(&self.device, "reading back a texture")?;
         receiver.recv().map_err(|_| RenderError::Map(wgpu::BufferAsyncError))??;
         let mut out = Vec::with_capacity((row * height) as usize);
         {

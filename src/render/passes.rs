@@ -192,8 +192,10 @@ impl ScenePasses {
         let depth_texture = |binding, view_dimension| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::FRAGMENT,
+            // Depth bound as unfilterable float: `textureLoad` from a
+            // `texture_depth_*` has no GLSL translation (GL backend).
             ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Depth,
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension,
                 multisampled: false,
             },
@@ -401,7 +403,6 @@ impl CameraTargets {
 /// layers are as large as the largest map (each map uses the top-left
 /// `width x height` texels of its layer).
 pub(crate) struct ShadowMaps {
-    pub(crate) texture: wgpu::Texture,
     pub(crate) array_view: wgpu::TextureView,
     pub(crate) layer_views: Vec<wgpu::TextureView>,
     pub(crate) width: u32,
@@ -410,6 +411,9 @@ pub(crate) struct ShadowMaps {
 
 impl ShadowMaps {
     pub(crate) fn new(device: &wgpu::Device, width: u32, height: u32, layers: u32) -> Self {
+        // At least two layers: the GL backend makes a one-layer texture a
+        // plain 2D texture, which then reads as zero through the array view.
+        let layers = layers.max(2);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("lixel shadow maps"),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
@@ -438,7 +442,7 @@ impl ShadowMaps {
                 })
             })
             .collect();
-        Self { texture, array_view, layer_views, width, height }
+        Self { array_view, layer_views, width, height }
     }
 
     pub(crate) fn layers(&self) -> u32 {

@@ -4,35 +4,39 @@
 
 use glam::{DVec3, UVec2};
 use lixel::mesh::{ProceduralScene, Scene};
-use lixel::render::Renderer;
+use lixel::render::Gpu;
 use lixel::{Camera, Light, LightMatrix, Parameterization, ShadowMapSize, ShadowProblem};
 
-/// A device and queue with the renderer's optional features where the
-/// adapter has them, or `None` (test skipped) when there is no adapter.
+/// A device and queue from [`Gpu::open`] (Vulkan, else GL; `WGPU_BACKEND`
+/// when set), or `None` (test skipped) when there is no adapter.
 ///
 /// # Panics
-/// With `CI=true` a missing adapter is a failure, not a skip: CI installs
-/// lavapipe (`mesa-vulkan-drivers`), so no adapter means a broken setup.
+/// With `CI=true` a missing adapter is a failure, not a skip.
 pub fn gpu() -> Option<(wgpu::Device, wgpu::Queue)> {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default())) {
-        Ok(adapter) => adapter,
+    gpu_on(None).map(|g| (g.device, g.queue))
+}
+
+/// A device on `backends` (`None`: as [`gpu`]), or `None` (skipped) when
+/// there is no such adapter; with `CI=true` a missing adapter fails. With
+/// `backends: None` and `LIXEL_EXPECT_BACKEND` set (`vulkan`, `gl`), the
+/// adapter must be on that backend.
+pub fn gpu_on(backends: Option<wgpu::Backends>) -> Option<Gpu> {
+    match Gpu::open(backends, "lixel test device") {
+        Ok(gpu) => {
+            // `.ci/run` sets this for its GL run so that a Vulkan adapter
+            // found by mistake cannot pass for GL.
+            if let (None, Ok(expected)) = (backends, std::env::var("LIXEL_EXPECT_BACKEND")) {
+                assert_eq!(gpu.info.backend.to_string(), expected, "adapter {}", gpu.describe());
+            }
+            Some(gpu)
+        }
         Err(e) => {
             let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
-            assert!(!ci, "CI=true but no GPU adapter ({e}); install mesa-vulkan-drivers");
-            eprintln!("skipping: no GPU adapter ({e}); install mesa-vulkan-drivers for lavapipe");
-            return None;
+            assert!(!ci, "CI=true but {e}");
+            eprintln!("skipping: {e}");
+            None
         }
-    };
-    let required_features = adapter.features() & Renderer::optional_features();
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("lixel test device"),
-        required_features,
-        required_limits: wgpu::Limits::default(),
-        ..Default::default()
-    }))
-    .expect("the adapter offers a device with default limits");
-    Some((device, queue))
+    }
 }
 
 /// The tiny procedural scene (a few thousand triangles).
