@@ -66,4 +66,4 @@ pub use methods::{
 pub use optimize::{optimize_light_matrix, OptimizeOptions, OptimizeReport, Optimized, Optimizer, Samples};
 pub use problem::ShadowProblem;
 pub use scene::{Aabb, SceneBounds, ShadowMapSize};
-pub use tolerance::Tolerances;
+pub use tolerance::{Tolerances, MAX_COORDINATE, MAX_LIGHTS};

@@ -111,7 +111,7 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
         return uniform(sin_gamma);
     }
     let z_n = depth_min.max(camera.z_near());
-    let z_f = depth_max.max(z_n * (1.0 + 1e-9));
+    let z_f = depth_max.max(z_n * (1.0 + problem.tolerances().min_relative_span));
     let n_world = match options.n_opt {
         NOpt::Simple => (z_n + (z_n * z_f).sqrt()) / sin_gamma,
         NOpt::General => {

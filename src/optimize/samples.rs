@@ -77,6 +77,9 @@ pub struct Samples {
     pub(crate) boundary: Vec<BoundarySample>,
     /// `X~` of every relevant sample.
     pub(crate) relevant: Vec<DVec3>,
+    /// World position of every relevant sample (the optimizer checks its
+    /// answer on them, as a renderer evaluates it).
+    pub(crate) relevant_world: Vec<DVec3>,
     /// World points whose depth the map must cover: the visible receivers'
     /// body and its casters, and every relevant sample.
     pub(crate) depth_points: Vec<DVec3>,
@@ -97,6 +100,7 @@ impl Samples {
             frame,
             boundary: Vec::new(),
             relevant: Vec::new(),
+            relevant_world: Vec::new(),
             depth_points,
             counts: SampleCounts::default(),
         }
@@ -169,7 +173,9 @@ impl Samples {
                 (glam::DVec2::new(d.x, d.y) - px * d.w) / clip.w
             };
             let ds = DMat2::from_cols(column(t1), column(t2));
-            if !(ds.determinant().abs() > 0.0) {
+            // Seen (nearly) edge-on: the tangent images are (nearly) parallel.
+            let sine = ds.determinant().abs() / (ds.x_axis.length() * ds.y_axis.length());
+            if !(sine > problem.tolerances().min_view_sine) {
                 samples.counts.rejected_invalid += 1;
                 continue;
             }
@@ -189,7 +195,7 @@ impl Samples {
     /// Adds a relevant world point; `false` if it was rejected.
     fn push_relevant(&mut self, p: DVec3, camera: &crate::Camera) -> bool {
         self.counts.covered += 1;
-        if !p.is_finite() || camera.view_depth(p) <= 0.0 {
+        if !p.is_finite() || p.abs().max_element() > crate::MAX_COORDINATE || camera.view_depth(p) <= 0.0 {
             self.counts.rejected_invalid += 1;
             return false;
         }
@@ -199,6 +205,7 @@ impl Samples {
             return false;
         }
         self.relevant.push(x);
+        self.relevant_world.push(p);
         self.depth_points.push(p);
         true
     }
@@ -229,7 +236,7 @@ impl Samples {
         {
             return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
         }
-        if light_index >= 32 {
+        if light_index as usize >= crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "light index must be below 32" });
         }
         let mut samples = Self::empty(problem);
@@ -311,6 +318,7 @@ impl Samples {
                 let world = here.truncate() / here.w;
                 let x_light = samples.frame.homogeneous4(here);
                 samples.relevant.push(x_light);
+                samples.relevant_world.push(world);
                 samples.depth_points.push(world);
                 if !mixed {
                     continue;
