@@ -282,13 +282,15 @@ fn check_readback(readback: &Readback<'_>) -> Result<()> {
 }
 
 /// OR of `src` over each pixel's 3x3 neighbourhood (clamped at the edges),
-/// separably through `tmp`.
-fn or_3x3(src: &[u32], tmp: &mut [u32], dst: &mut [u32], w: usize, h: usize) {
+/// separably.
+fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(src: &[T], w: usize, h: usize) -> Vec<T> {
+    let mut tmp = vec![T::default(); src.len()];
     for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
         for x in 0..w {
             t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
         }
     }
+    let mut dst = vec![T::default(); src.len()];
     for y in 0..h {
         let (above, here, below) =
             (&tmp[y.saturating_sub(1) * w..][..w], &tmp[y * w..][..w], &tmp[(y + 1).min(h - 1) * w..][..w]);
@@ -296,17 +298,66 @@ fn or_3x3(src: &[u32], tmp: &mut [u32], dst: &mut [u32], w: usize, h: usize) {
             *cell = above[x] | here[x] | below[x];
         }
     }
+    dst
+}
+
+/// Per pixel and light slot `k` (the `k`-th light extracted): shadowed, and
+/// lit, over covered pixels; and the OR of both over the 3x3 neighbourhood,
+/// so a slot both shadowed and lit nearby marks a shadow boundary. One light
+/// packs into a byte (bit 0 shadowed, bit 1 lit); up to 32 into a `u64`
+/// (shadowed slots in the low half, lit in the high half), so one pass
+/// serves every light.
+enum Classes {
+    One { class: Vec<u8>, near: Vec<u8> },
+    Many { class: Vec<u64>, near: Vec<u64> },
+}
+
+impl Classes {
+    fn new(readback: &Readback<'_>, bits: &[u32], valid: impl Fn(f32) -> bool) -> Self {
+        let (w, h) = (readback.width as usize, readback.height as usize);
+        let pixels = readback.depth.iter().zip(readback.shadow_bits);
+        if let [bit] = *bits {
+            let class: Vec<u8> = pixels
+                .map(|(&d, &b)| match (valid(d), b >> bit & 1 != 0) {
+                    (false, _) => 0,
+                    (true, true) => 1,
+                    (true, false) => 2,
+                })
+                .collect();
+            let near = or_3x3(&class, w, h);
+            return Self::One { class, near };
+        }
+        let class: Vec<u64> = pixels
+            .map(|(&d, &b)| {
+                if !valid(d) {
+                    return 0;
+                }
+                bits.iter()
+                    .enumerate()
+                    .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
+            })
+            .collect();
+        let near = or_3x3(&class, w, h);
+        Self::Many { class, near }
+    }
+
+    /// Slots shadowed at pixel `i`, and slots with a shadow boundary there.
+    fn at(&self, i: usize) -> (u32, u32) {
+        match self {
+            Self::One { class, near } => (u32::from(class[i] & 1), u32::from(near[i] & (near[i] >> 1) & 1)),
+            Self::Many { class, near } => (class[i] as u32, near[i] as u32 & (near[i] >> 32) as u32),
+        }
+    }
 }
 
 /// Fills `all[k]` (already [`Samples::empty`]) from the readback for light
-/// bit `bits[k]`, in one pass over the pixels.
+/// bit `bits[k]` (at most 32 lights), in one pass over the pixels.
 fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: &SampleOptions) {
     let (w, h) = (readback.width as usize, readback.height as usize);
     let n = w * h;
     if n == 0 || all.is_empty() {
         return;
     }
-    let mask = bits.iter().fold(0u32, |m, &b| m | 1 << b);
     // Every light's problem shares the camera (the readback is its view).
     let camera = *all[0].problem.camera();
     let world_from_screen = camera.screen_from_world().inverse();
@@ -327,29 +378,15 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
             v
         }
     };
-    // Per light bit, over covered pixels: shadowed, and lit; then their OR
-    // over the 3x3 neighbourhood, so a bit set in both marks a boundary.
-    let shadow: Vec<u32> = readback
-        .depth
-        .iter()
-        .zip(readback.shadow_bits)
-        .map(|(&d, &b)| if valid(d) { b & mask } else { 0 })
-        .collect();
-    let lit: Vec<u32> =
-        readback.depth.iter().zip(readback.shadow_bits).map(|(&d, &b)| if valid(d) { !b & mask } else { 0 }).collect();
-    let mut tmp = vec![0u32; n];
-    let mut near_shadow = vec![0u32; n];
-    let mut near_lit = vec![0u32; n];
-    or_3x3(&shadow, &mut tmp, &mut near_shadow, w, h);
-    or_3x3(&lit, &mut tmp, &mut near_lit, w, h);
+    let classes = Classes::new(readback, bits, valid);
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
             if !valid(readback.depth[i]) {
                 continue;
             }
-            let (shadowed_bits, mixed_bits) = (shadow[i], near_shadow[i] & near_lit[i]);
-            for (samples, &bit) in all.iter_mut().zip(bits) {
+            let (shadowed_bits, mixed_bits) = classes.at(i);
+            for (bit, samples) in all.iter_mut().enumerate() {
                 samples.counts.covered += 1;
                 samples.counts.shadowed += (shadowed_bits >> bit & 1) as usize;
             }
@@ -362,7 +399,7 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
             let sy = (y as f64 + 0.5) * step.y;
             let here = unproject(sx, sy, d);
             if !(here.w > 0.0) || !here.is_finite() {
-                for (samples, &bit) in all.iter_mut().zip(bits) {
+                for (bit, samples) in all.iter_mut().enumerate() {
                     samples.counts.rejected_invalid += (active >> bit & 1) as usize;
                 }
                 continue;
@@ -370,7 +407,7 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
             let world = here.truncate() / here.w;
             // Light-independent surface derivatives, computed on first use.
             let mut surface: Option<Option<Surface>> = None;
-            for (samples, &bit) in all.iter_mut().zip(bits) {
+            for (bit, samples) in all.iter_mut().enumerate() {
                 if active >> bit & 1 == 0 {
                     continue;
                 }
@@ -384,7 +421,18 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
                 }
                 samples.counts.boundary_candidates += 1;
                 let found = *surface.get_or_insert_with(|| {
-                    surface_at(readback, &world_from_screen, &camera, options, (x, y), (sx, sy, d), here, world, step, &depth_at)
+                    surface_at(
+                        readback,
+                        &world_from_screen,
+                        &camera,
+                        options,
+                        (x, y),
+                        (sx, sy, d),
+                        here,
+                        world,
+                        step,
+                        &depth_at,
+                    )
                 });
                 let Some(found) = found else {
                     samples.counts.rejected_discontinuity += 1;
@@ -395,11 +443,9 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
                         let along = |t: DVec3| frame.homogeneous4(t.extend(0.0));
                         BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
                     }
-                    Surface::Depth { dx4, dy4, .. } => BoundarySample {
-                        light: x_light,
-                        d_dx: frame.homogeneous4(dx4),
-                        d_dy: frame.homogeneous4(dy4),
-                    },
+                    Surface::Depth { dx4, dy4, .. } => {
+                        BoundarySample { light: x_light, d_dx: frame.homogeneous4(dx4), d_dy: frame.homogeneous4(dy4) }
+                    }
                 };
                 if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
                     samples.counts.rejected_back_facing += 1;
