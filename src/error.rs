@@ -22,6 +22,15 @@ pub enum LixelError {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// An engine's camera matrices cannot be one camera: `property` says
+    /// which property failed ([`Camera::from_matrices`](crate::Camera::from_matrices)).
+    #[error("invalid camera matrices ({property}): {reason}")]
+    InvalidProjection {
+        /// The property that failed.
+        property: crate::conventions::CameraProperty,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// The light cannot be used (zero direction, spot cone of 90 degrees or more, ...).
     #[error("invalid light: {reason}")]
     InvalidLight {

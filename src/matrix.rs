@@ -82,6 +82,12 @@ pub enum Fallback {
     /// It holds the visible receivers `V ∩ R ∩ L`; relevant samples outside
     /// them (which a correct readback does not produce) are not guaranteed.
     NoUsableSamples,
+    /// PSM or LiSPSM with an orthographic camera: both methods counter the
+    /// camera's perspective, and without one their warp vanishes (PSM's
+    /// post-perspective space is an affine image of the world; LiSPSM's
+    /// `n_opt` grows without bound as the eye recedes), so the focused
+    /// (uniform) map is the method's own limit.
+    OrthographicCamera,
 }
 
 /// How depth is stored, with the range it covers.

@@ -194,10 +194,13 @@ impl ShadowProblem {
             .collect()
     }
 
-    /// The view frustum `V` as a polyhedron (may be huge for a far far plane).
+    /// The view frustum `V` as a polyhedron (may be huge for a far far plane;
+    /// an infinite far plane is cut just beyond the scene bounds, which are
+    /// always finite).
     #[must_use]
     pub fn view_body(&self) -> ConvexPolyhedron {
-        ConvexPolyhedron::from_frustum_corners(&self.camera.frustum_corners()).unwrap_or_else(ConvexPolyhedron::empty)
+        let corners = self.camera.frustum_corners_within(&self.bounds.scene());
+        ConvexPolyhedron::from_frustum_corners(&corners).unwrap_or_else(ConvexPolyhedron::empty)
     }
 
     /// The light's own frustum `L` as half-spaces: empty (everything) for

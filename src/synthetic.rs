@@ -55,6 +55,7 @@ impl SyntheticReadback {
             depth: &self.depth,
             shadow_bits: &self.shadow_bits,
             normals: with_normals.then_some(&self.normals[..]),
+            layout: crate::optimize::ReadbackLayout::default(),
         }
     }
 }

@@ -73,6 +73,9 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
     if focus.is_empty() {
         return super::focused::solve_as(problem, Method::LiSpsm, None);
     }
+    if problem.camera().is_orthographic() {
+        return super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::OrthographicCamera));
+    }
     let frame = problem.frame_towards(&focus);
     let j0 = super::uniform_axis(problem, &frame, &focus, Method::LiSpsm)?;
     let (e1, e2) = j0.any_orthonormal_pair();

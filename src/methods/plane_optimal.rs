@@ -153,9 +153,10 @@ fn plane_optimal_axis(problem: &ShadowProblem, frame: &crate::LightFrame, plane:
     }
     let pixel_from_light = pixel_from_plane * light_from_plane.inverse();
     let axis = pixel_from_light.row(2);
-    // The eye in the plane makes the w row of S P vanish on the plane's frame.
+    // The eye in the plane makes the w row of S P vanish on the plane's frame
+    // (an orthographic camera's w row is constant: no such eye).
     let eye_distance = plane.signed_distance(problem.camera().eye()).abs();
-    if !(eye_distance > problem.eps()) {
+    if !problem.camera().is_orthographic() && !(eye_distance > problem.eps()) {
         return None;
     }
     axis.try_normalize()

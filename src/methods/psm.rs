@@ -80,7 +80,12 @@ fn post_perspective(problem: &ShadowProblem, options: &PsmOptions, hull: &Convex
     let view = camera.view_from_world();
     // Virtual shift: every vertex of H must be at least `near` in front.
     let delta = hull.vertices().iter().map(|&p| (view * p.extend(1.0)).z + near).fold(0.0_f64, f64::max);
-    let far = camera.z_far().max(near * (1.0 + problem.tolerances().min_relative_span)) + delta;
+    // An infinite far plane: the hull (clipped by the finite scene) ends first.
+    let far = match camera.z_far() {
+        f if f.is_finite() => f,
+        _ => hull.vertices().iter().map(|&p| camera.view_depth(p)).fold(near, f64::max) * 2.0,
+    };
+    let far = far.max(near * (1.0 + problem.tolerances().min_relative_span)) + delta;
     let shifted_view = DMat4::from_translation(DVec3::new(0.0, 0.0, -delta)) * view;
     // Keep the camera's x/y rows (asymmetric or jittered frusta included) and
     // replace the depth row by one for [near, far]: z_ndc = (a z + b) / (-z).
@@ -114,6 +119,9 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions) -> Result<Lig
     let focus = problem.visible_receiver_body();
     if focus.is_empty() {
         return super::focused::solve_as(problem, Method::Psm, None);
+    }
+    if problem.camera().is_orthographic() {
+        return super::focused::solve_as(problem, Method::Psm, Some(Fallback::OrthographicCamera));
     }
     let hull = problem.psm_hull();
     let frame = problem.frame_towards(&focus);

@@ -27,7 +27,7 @@ pub use objective::{
     objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
     SampleGradient,
 };
-pub use samples::{Readback, SampleCounts, SampleOptions, Samples};
+pub use samples::{PixelRect, Readback, ReadbackDepth, ReadbackLayout, RowOrder, SampleCounts, SampleOptions, Samples};
 pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
 
 /// The paper's rotation angles, in degrees (one negative for exploration).

@@ -10,19 +10,167 @@ use crate::optimize::objective::BoundarySample;
 use crate::problem::ShadowProblem;
 
 /// A low-resolution readback of the camera's analysis pass, as an engine
-/// reads it: row-major, row 0 at the top, covering the full viewport.
+/// reads it: row-major, laid out as [`layout`](Self::layout) says.
 #[derive(Clone, Copy, Debug)]
 pub struct Readback<'a> {
     /// Width in pixels (of the readback, not the screen).
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Depth-buffer values in `[0, 1]`; `1` (the cleared far plane) means no geometry.
+    /// Depth values, in the convention of [`ReadbackLayout::depth`].
     pub depth: &'a [f32],
     /// Bit `i` set: the pixel is in light `i`'s shadow.
     pub shadow_bits: &'a [u32],
     /// Optional world-space normals (need not be unit length).
     pub normals: Option<&'a [[f32; 3]]>,
+    /// Depth convention, row order and covered part of the viewport.
+    pub layout: ReadbackLayout,
+}
+
+/// What a readback's depth values are.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ReadbackDepth {
+    /// lixel's own depth of the normalised camera (the `z` of
+    /// [`Camera::screen_from_world`](crate::Camera::screen_from_world)):
+    /// `[0, 1]` growing away from the eye, `1` = nothing. What lixel's
+    /// renderer and [`SyntheticScene`](crate::synthetic::SyntheticScene)
+    /// write; for a wgpu-convention camera (such as
+    /// [`Camera::look_at`](crate::Camera::look_at)) the same as [`Window`](Self::Window).
+    #[default]
+    Lixel,
+    /// The depth buffer of the engine's `[0, 1]` clip-depth projection,
+    /// forward: NDC depth, `1` (the cleared far plane) = nothing.
+    Window,
+    /// The depth buffer of a reverse-Z `[0, 1]` projection: `0` = nothing.
+    WindowReversed,
+    /// OpenGL window depth of a `[-1, 1]` projection (`glDepthRange(0, 1)`):
+    /// `(z_ndc + 1) / 2`, `1` = nothing.
+    GlWindow,
+    /// Linear distance in front of the eye along the view direction, in
+    /// world units; non-finite = nothing.
+    LinearView,
+}
+
+/// Row order of a readback.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum RowOrder {
+    /// Row 0 is the top of the screen (wgpu, Direct3D, Vulkan, Metal).
+    #[default]
+    TopDown,
+    /// Row 0 is the bottom (OpenGL's `glReadPixels`).
+    BottomUp,
+}
+
+/// A rectangle of the viewport in full-resolution pixels; `y` counts rows
+/// in the readback's [`RowOrder`] (from the bottom for `BottomUp`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PixelRect {
+    /// First column.
+    pub x: u32,
+    /// First row.
+    pub y: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+/// How a [`Readback`] is laid out. The default is lixel's own: lixel depth,
+/// top-down rows, the whole viewport.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct ReadbackLayout {
+    /// What the depth values are.
+    pub depth: ReadbackDepth,
+    /// Row order.
+    pub rows: RowOrder,
+    /// The part of the viewport the readback covers; `None` is all of it.
+    pub rect: Option<PixelRect>,
+}
+
+/// A readback brought to lixel's convention: top-down rows, lixel depth
+/// (non-finite where nothing was drawn), screen placement.
+struct Grid {
+    width: usize,
+    height: usize,
+    depth: Vec<f64>,
+    bits: Vec<u32>,
+    normals: Option<Vec<[f32; 3]>>,
+    /// Screen position of the readback's top-left corner, full-resolution pixels.
+    origin: glam::DVec2,
+    /// Full-resolution pixels per readback pixel.
+    step: glam::DVec2,
+}
+
+impl Grid {
+    fn new(camera: &crate::Camera, readback: &Readback<'_>) -> Result<Self> {
+        use crate::conventions::DepthDirection;
+        let (w, h) = (readback.width as usize, readback.height as usize);
+        let layout = readback.layout;
+        let viewport = camera.viewport();
+        let rect = layout.rect.unwrap_or(PixelRect { x: 0, y: 0, width: viewport.x, height: viewport.y });
+        let inside = rect.width > 0
+            && rect.height > 0
+            && u64::from(rect.x) + u64::from(rect.width) <= u64::from(viewport.x)
+            && u64::from(rect.y) + u64::from(rect.height) <= u64::from(viewport.y);
+        if !inside {
+            return Err(LixelError::UnusableSamples { reason: "readback rectangle is empty or outside the viewport" });
+        }
+        let reverse = camera.conventions().depth == DepthDirection::Reverse;
+        match layout.depth {
+            ReadbackDepth::WindowReversed if !reverse => {
+                return Err(LixelError::UnusableSamples {
+                    reason: "readback depth is reverse-Z but the camera's projection is forward-Z",
+                })
+            }
+            ReadbackDepth::Window | ReadbackDepth::GlWindow if reverse => {
+                return Err(LixelError::UnusableSamples {
+                    reason: "readback depth is forward-Z but the camera's projection is reverse-Z",
+                })
+            }
+            _ => {}
+        }
+        let top = match layout.rows {
+            RowOrder::TopDown => rect.y,
+            RowOrder::BottomUp => viewport.y - rect.y - rect.height,
+        };
+        let to_lixel = |v: f32| -> f64 {
+            let v = f64::from(v);
+            if !v.is_finite() {
+                return f64::NAN;
+            }
+            let lixel = match layout.depth {
+                ReadbackDepth::Lixel => v,
+                ReadbackDepth::Window if v >= 1.0 => f64::NAN,
+                ReadbackDepth::WindowReversed if v <= 0.0 => f64::NAN,
+                ReadbackDepth::GlWindow if v >= 1.0 => f64::NAN,
+                ReadbackDepth::Window | ReadbackDepth::WindowReversed => {
+                    camera.depth_at_distance(camera.distance_at_source_depth(v))
+                }
+                ReadbackDepth::GlWindow => camera.depth_at_distance(camera.distance_at_source_depth(2.0 * v - 1.0)),
+                ReadbackDepth::LinearView => camera.depth_at_distance(v),
+            };
+            if lixel.is_finite() && (0.0..1.0).contains(&lixel) {
+                lixel
+            } else {
+                f64::NAN
+            }
+        };
+        let source_row = |y: usize| match layout.rows {
+            RowOrder::TopDown => y,
+            RowOrder::BottomUp => h - 1 - y,
+        };
+        let rows = |y: usize| source_row(y) * w..source_row(y) * w + w;
+        Ok(Self {
+            width: w,
+            height: h,
+            depth: (0..h).flat_map(|y| readback.depth[rows(y)].iter().map(|&v| to_lixel(v))).collect(),
+            bits: (0..h).flat_map(|y| readback.shadow_bits[rows(y)].iter().copied()).collect(),
+            normals: readback.normals.map(|n| (0..h).flat_map(|y| n[rows(y)].iter().copied()).collect()),
+            origin: glam::DVec2::new(f64::from(rect.x), f64::from(top)),
+            step: glam::DVec2::new(f64::from(rect.width) / w as f64, f64::from(rect.height) / h as f64),
+        })
+    }
 }
 
 /// How [`Samples::from_readback`] classifies pixels.
@@ -195,7 +343,10 @@ impl Samples {
     /// Adds a relevant world point; `false` if it was rejected.
     fn push_relevant(&mut self, p: DVec3, camera: &crate::Camera) -> bool {
         self.counts.covered += 1;
-        if !p.is_finite() || p.abs().max_element() > crate::MAX_COORDINATE || camera.view_depth(p) <= 0.0 {
+        if !p.is_finite()
+            || p.abs().max_element() > crate::MAX_COORDINATE
+            || !((camera.clip_from_world() * p.extend(1.0)).w > 0.0)
+        {
             self.counts.rejected_invalid += 1;
             return false;
         }
@@ -219,9 +370,15 @@ impl Samples {
     /// read-back normals when given, else from central differences of depth.
     /// Relevant samples: every shadowed pixel plus the boundary samples.
     ///
+    /// The readback may be in the engine's own layout ([`ReadbackLayout`]):
+    /// its depth convention, row order and sub-rectangle are brought to
+    /// lixel's first, so every layout of the same image gives the same samples.
+    ///
     /// # Errors
     /// [`LixelError::UnusableSamples`] when the buffer sizes do not match
-    /// `width x height` or `light_index >= 32`.
+    /// `width x height`, `light_index >= 32`, the rectangle is empty or
+    /// outside the viewport, or the declared depth direction contradicts the
+    /// camera's projection.
     pub fn from_readback(
         problem: &ShadowProblem,
         readback: &Readback<'_>,
@@ -232,8 +389,9 @@ impl Samples {
         if light_index as usize >= crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "light index must be below 32" });
         }
+        let grid = Grid::new(problem.camera(), readback)?;
         let mut all = vec![Self::empty(problem)];
-        extract(&mut all, &[light_index], readback, options);
+        extract(&mut all, &[light_index], &grid, options);
         Ok(all.pop().expect("one light"))
     }
 
@@ -256,6 +414,13 @@ impl Samples {
         if problems.len() > crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "at most 32 lights share a readback" });
         }
+        let Some(first) = problems.first() else {
+            return Ok(Vec::new());
+        };
+        if problems.iter().any(|p| p.camera() != first.camera()) {
+            return Err(LixelError::UnusableSamples { reason: "lights sharing a readback must share its camera" });
+        }
+        let grid = Grid::new(first.camera(), readback)?;
         #[cfg(feature = "rayon")]
         let mut all: Vec<Self> = {
             use rayon::prelude::*;
@@ -264,7 +429,7 @@ impl Samples {
         #[cfg(not(feature = "rayon"))]
         let mut all: Vec<Self> = problems.iter().map(Self::empty).collect();
         let bits: Vec<u32> = (0..problems.len() as u32).collect();
-        extract(&mut all, &bits, readback, options);
+        extract(&mut all, &bits, &grid, options);
         Ok(all)
     }
 }
@@ -313,9 +478,10 @@ enum Classes {
 }
 
 impl Classes {
-    fn new(readback: &Readback<'_>, bits: &[u32], valid: impl Fn(f32) -> bool) -> Self {
-        let (w, h) = (readback.width as usize, readback.height as usize);
-        let pixels = readback.depth.iter().zip(readback.shadow_bits);
+    fn new(grid: &Grid, bits: &[u32]) -> Self {
+        let (w, h) = (grid.width, grid.height);
+        let valid = |d: f64| d.is_finite();
+        let pixels = grid.depth.iter().zip(&grid.bits);
         if let [bit] = *bits {
             let class: Vec<u8> = pixels
                 .map(|(&d, &b)| match (valid(d), b >> bit & 1 != 0) {
@@ -352,8 +518,8 @@ impl Classes {
 
 /// Fills `all[k]` (already [`Samples::empty`]) from the readback for light
 /// bit `bits[k]` (at most 32 lights), in one pass over the pixels.
-fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: &SampleOptions) {
-    let (w, h) = (readback.width as usize, readback.height as usize);
+fn extract(all: &mut [Samples], bits: &[u32], grid: &Grid, options: &SampleOptions) {
+    let (w, h) = (grid.width, grid.height);
     let n = w * h;
     if n == 0 || all.is_empty() {
         return;
@@ -361,13 +527,11 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
     // Every light's problem shares the camera (the readback is its view).
     let camera = *all[0].problem.camera();
     let world_from_screen = camera.screen_from_world().inverse();
-    let viewport = camera.viewport().as_dvec2();
-    // Full-resolution pixels per readback pixel.
-    let step = glam::DVec2::new(viewport.x / w as f64, viewport.y / h as f64);
-    let valid = |d: f32| d.is_finite() && (0.0..1.0).contains(&d);
+    let step = grid.step;
+    // Lixel depth, non-finite where nothing was drawn (see `Grid`).
     let depth_at = |x: usize, y: usize| -> Option<f64> {
-        let d = readback.depth[y * w + x];
-        valid(d).then_some(f64::from(d))
+        let d = grid.depth[y * w + x];
+        d.is_finite().then_some(d)
     };
     // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
     let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
@@ -378,11 +542,11 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
             v
         }
     };
-    let classes = Classes::new(readback, bits, valid);
+    let classes = Classes::new(grid, bits);
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
-            if !valid(readback.depth[i]) {
+            if !grid.depth[i].is_finite() {
                 continue;
             }
             let (shadowed_bits, mixed_bits) = classes.at(i);
@@ -394,9 +558,9 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
             if active == 0 {
                 continue;
             }
-            let d = f64::from(readback.depth[i]);
-            let sx = (x as f64 + 0.5) * step.x;
-            let sy = (y as f64 + 0.5) * step.y;
+            let d = grid.depth[i];
+            let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let here = unproject(sx, sy, d);
             if !(here.w > 0.0) || !here.is_finite() {
                 for (bit, samples) in all.iter_mut().enumerate() {
@@ -422,7 +586,7 @@ fn extract(all: &mut [Samples], bits: &[u32], readback: &Readback<'_>, options: 
                 samples.counts.boundary_candidates += 1;
                 let found = *surface.get_or_insert_with(|| {
                     surface_at(
-                        readback,
+                        grid,
                         &world_from_screen,
                         &camera,
                         options,
@@ -477,7 +641,7 @@ impl Surface {
 /// or where the derivatives are not finite.
 #[allow(clippy::too_many_arguments)]
 fn surface_at(
-    readback: &Readback<'_>,
+    grid: &Grid,
     world_from_screen: &glam::DMat4,
     camera: &crate::Camera,
     options: &SampleOptions,
@@ -488,7 +652,7 @@ fn surface_at(
     step: glam::DVec2,
     depth_at: &impl Fn(usize, usize) -> Option<f64>,
 ) -> Option<Surface> {
-    let (w, h) = (readback.width as usize, readback.height as usize);
+    let (w, h) = (grid.width, grid.height);
     // Depth slope along each screen axis (full-resolution units).
     let slope = |dx: isize, dy: isize| -> Option<f64> {
         let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
@@ -502,7 +666,7 @@ fn surface_at(
         (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
             .then_some(first / if dx != 0 { step.x } else { step.y })
     };
-    let normal_given = readback.normals.map(|normals| {
+    let normal_given = grid.normals.as_ref().map(|normals| {
         let [nx, ny, nz] = normals[y * w + x];
         DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
     });
@@ -521,7 +685,7 @@ fn surface_at(
             let tx = (dx4.truncate() - world * dx4.w) / here.w;
             let ty = (dy4.truncate() - world * dy4.w) / here.w;
             let mut normal = tx.cross(ty).normalize_or_zero();
-            if normal.dot(camera.eye() - world) < 0.0 {
+            if normal.dot(camera.towards_viewer(world)) < 0.0 {
                 normal = -normal;
             }
             // Homogeneous point and its homogeneous derivatives: one scale.
@@ -542,7 +706,8 @@ fn plane_derivatives(
     // Move one pixel along x (or y) and intersect that pixel's ray with the plane.
     let hit = |px: f64, py: f64| -> Option<DVec3> {
         let a = world_from_screen.project_point3(DVec3::new(px, py, 0.0));
-        let b = world_from_screen.project_point3(DVec3::new(px, py, 1.0));
+        // Depth 0.5, not 1: an infinite far plane's depth 1 is at infinity.
+        let b = world_from_screen.project_point3(DVec3::new(px, py, 0.5));
         let denom = normal.dot(b - a);
         if denom.abs() <= f64::EPSILON * (b - a).length() {
             return None;

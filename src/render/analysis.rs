@@ -98,6 +98,7 @@ impl AnalysisReadback {
             depth: &self.masks.depth,
             shadow_bits: bits,
             normals: Some(&self.normals),
+            layout: crate::optimize::ReadbackLayout::default(),
         }
     }
 
