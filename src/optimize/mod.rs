@@ -145,6 +145,43 @@ pub fn optimize_light_matrix(samples: &Samples, prev: Option<&LightMatrix>) -> R
     Optimizer::new(OptimizeOptions::default()).optimize(samples, prev)
 }
 
+/// Scene-optimizes several lights: light `i` with `optimizers[i]` (its
+/// reusable buffers), `samples[i]` and `prev[i]`. With the `rayon` feature
+/// the lights run in parallel; each light's result is exactly what
+/// [`Optimizer::optimize`] returns for it alone (the lights share nothing).
+/// An engine extracts the samples of all its lights with
+/// [`Samples::from_readback_all`] and calls this once per analysis frame.
+///
+/// # Errors
+/// [`LixelError::UnusableSamples`] when the three slices differ in length;
+/// each light's own error is in its entry.
+pub fn optimize_lights(
+    optimizers: &mut [Optimizer],
+    samples: &[Samples],
+    prev: &[Option<LightMatrix>],
+) -> Result<Vec<Result<Optimized>>> {
+    if optimizers.len() != samples.len() || prev.len() != samples.len() {
+        return Err(LixelError::UnusableSamples { reason: "one optimizer and one previous matrix per light" });
+    }
+    #[cfg(feature = "rayon")]
+    {
+        use rayon::prelude::*;
+        Ok(optimizers
+            .par_iter_mut()
+            .zip(samples.par_iter().zip(prev.par_iter()))
+            .map(|(optimizer, (samples, prev))| optimizer.optimize(samples, prev.as_ref()))
+            .collect())
+    }
+    #[cfg(not(feature = "rayon"))]
+    {
+        Ok(optimizers
+            .iter_mut()
+            .zip(samples.iter().zip(prev))
+            .map(|(optimizer, (samples, prev))| optimizer.optimize(samples, prev.as_ref()))
+            .collect())
+    }
+}
+
 /// The optimizer with reusable buffers: repeated calls allocate nothing new
 /// once the buffers have grown to the largest sample set seen.
 #[derive(Clone, Debug)]
