@@ -12,6 +12,11 @@ use crate::mesh::ShadowMasks;
 
 /// Line colour of each method in the plots.
 fn color(method: MethodKind) -> Rgba<u8> {
+    if method.spsm() {
+        // The base method's hue, darker.
+        let [r, g, b, a] = color(method.base()).0;
+        return Rgba([r / 2, g / 2, b / 2, a]);
+    }
     match method {
         MethodKind::Normal => Rgba([120, 120, 120, 255]),
         MethodKind::Focused => Rgba([31, 119, 180, 255]),
@@ -20,6 +25,7 @@ fn color(method: MethodKind) -> Rgba<u8> {
         MethodKind::PlaneOptimal => Rgba([255, 127, 14, 255]),
         MethodKind::Optimized => Rgba([214, 39, 40, 255]),
         MethodKind::OptimizedArgmin => Rgba([227, 119, 194, 255]),
+        _ => Rgba([0, 0, 0, 255]),
     }
 }
 
@@ -165,7 +171,7 @@ pub(super) fn extremes(
             let problem = runner.problem(light, config.map)?;
             let nearest = super::nearest_view_depth(runner.camera(), &truth);
             let Ok((matrix, _, _)) = runner.matrix(m, &problem, nearest) else { continue };
-            let masks = runner.masks(&matrix)?;
+            let masks = runner.masks_of(m, &matrix)?;
             let counts = Counts::compare(&masks, &truth);
             let path = dir.join(format!("{}-{which}-config{index}-{}px.png", m.name(), counts.misclassified()));
             save(&error_overlay(&masks, &truth), &path)?;

@@ -26,7 +26,9 @@ use glam::{DVec3, UVec2};
 
 use crate::mesh::{RayCaster, Scene, ShadowMasks};
 use crate::optimize::{OptimizeOptions, Optimizer, SampleOptions, SearchStrategy};
-use crate::render::{AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces};
+use crate::render::{
+    AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces, ShadowLookup, SpsmOptions,
+};
 use crate::{
     Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, Samples, ShadowMapSize, ShadowProblem,
 };
@@ -52,6 +54,20 @@ pub enum MethodKind {
     Optimized,
     /// Scene-optimized with argmin's Nelder–Mead.
     OptimizedArgmin,
+    /// `normal+spsm`: the normal matrix with the sub-pixel shadow-map lookup.
+    NormalSpsm,
+    /// `focused+spsm`.
+    FocusedSpsm,
+    /// `lispsm+spsm`.
+    LiSpsmSpsm,
+    /// `psm+spsm`.
+    PsmSpsm,
+    /// `plane-optimal+spsm`.
+    PlaneOptimalSpsm,
+    /// `optimized+spsm` (its frame loop's analysis bits come from the SPSM lookup too).
+    OptimizedSpsm,
+    /// `optimized-argmin+spsm`.
+    OptimizedArgminSpsm,
 }
 
 impl MethodKind {
@@ -66,6 +82,17 @@ impl MethodKind {
         Self::OptimizedArgmin,
     ];
 
+    /// Every method with the SPSM lookup (`<method>+spsm`), in report order.
+    pub const ALL_SPSM: [Self; 7] = [
+        Self::NormalSpsm,
+        Self::FocusedSpsm,
+        Self::LiSpsmSpsm,
+        Self::PsmSpsm,
+        Self::PlaneOptimalSpsm,
+        Self::OptimizedSpsm,
+        Self::OptimizedArgminSpsm,
+    ];
+
     /// Name used on the command line and in reports.
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -77,13 +104,41 @@ impl MethodKind {
             Self::PlaneOptimal => "plane-optimal",
             Self::Optimized => "optimized",
             Self::OptimizedArgmin => "optimized-argmin",
+            Self::NormalSpsm => "normal+spsm",
+            Self::FocusedSpsm => "focused+spsm",
+            Self::LiSpsmSpsm => "lispsm+spsm",
+            Self::PsmSpsm => "psm+spsm",
+            Self::PlaneOptimalSpsm => "plane-optimal+spsm",
+            Self::OptimizedSpsm => "optimized+spsm",
+            Self::OptimizedArgminSpsm => "optimized-argmin+spsm",
         }
     }
 
     /// Parses [`name`](Self::name).
     #[must_use]
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
+        Self::ALL.into_iter().chain(Self::ALL_SPSM).find(|m| m.name() == name)
+    }
+
+    /// The matrix method (the standard-lookup variant).
+    #[must_use]
+    pub fn base(self) -> Self {
+        match Self::ALL_SPSM.iter().position(|&m| m == self) {
+            Some(i) => Self::ALL[i],
+            None => self,
+        }
+    }
+
+    /// The same matrix method with the SPSM lookup.
+    #[must_use]
+    pub fn with_spsm(self) -> Self {
+        Self::ALL_SPSM[Self::ALL.iter().position(|&m| m == self.base()).expect("every base is in ALL")]
+    }
+
+    /// Whether it looks shadows up with sub-pixel shadow maps.
+    #[must_use]
+    pub fn spsm(self) -> bool {
+        self.base() != self
     }
 }
 
@@ -372,6 +427,12 @@ pub struct Runner<'a> {
     camera: Camera,
     caster: Option<RayCaster>,
     renderer: Renderer,
+    /// The renderer with the SPSM lookup, when a `+spsm` method runs.
+    spsm_renderer: Option<Renderer>,
+    /// Whether the next renders use `spsm_renderer`.
+    use_spsm: bool,
+    /// For creating `spsm_renderer` when first needed.
+    gpu: (wgpu::Device, wgpu::Queue),
 }
 
 impl std::fmt::Debug for Runner<'_> {
@@ -411,7 +472,8 @@ impl<'a> Runner<'a> {
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
         let options = experiment_renderer_options();
         let renderer = Renderer::new(device, queue, &scene, options)?;
-        Ok(Self { config, scene, camera, caster, renderer })
+        let gpu = (device.clone(), queue.clone());
+        Ok(Self { config, scene, camera, caster, renderer, spsm_renderer: None, use_spsm: false, gpu })
     }
 
     /// The camera.
@@ -437,8 +499,30 @@ impl<'a> Runner<'a> {
     /// Renders the camera view with `matrix` (masks included) and waits for it.
     fn render_view(&mut self, matrix: &LightMatrix) -> Result<(), ExperimentError> {
         let lights = std::slice::from_ref(matrix);
-        let report = self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None })?;
-        Ok(self.renderer.wait_for(&report.submission)?)
+        let camera = self.camera;
+        let renderer = self.active_renderer();
+        let report = renderer.render(&Frame { camera: &camera, lights, masks: true, analysis: None })?;
+        Ok(renderer.wait_for(&report.submission)?)
+    }
+
+    /// The renderer of the current lookup (standard unless a `+spsm` method runs).
+    fn active_renderer(&mut self) -> &mut Renderer {
+        match (&mut self.spsm_renderer, self.use_spsm) {
+            (Some(r), true) => r,
+            _ => &mut self.renderer,
+        }
+    }
+
+    /// Chooses the lookup of the following renders, for `method`; creates the
+    /// SPSM renderer when first needed.
+    fn select_lookup(&mut self, method: MethodKind) -> Result<(), ExperimentError> {
+        self.use_spsm = method.spsm();
+        if self.use_spsm && self.spsm_renderer.is_none() {
+            let options =
+                RendererOptions { lookup: ShadowLookup::Spsm(SpsmOptions::default()), ..experiment_renderer_options() };
+            self.spsm_renderer = Some(Renderer::new(&self.gpu.0, &self.gpu.1, &self.scene, options)?);
+        }
+        Ok(())
     }
 
     /// Renders the camera view with `matrix` and reads back its masks.
@@ -447,7 +531,29 @@ impl<'a> Runner<'a> {
     /// Renderer failures.
     pub fn masks(&mut self, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
         self.render_view(matrix)?;
-        Ok(self.renderer.read_masks()?)
+        Ok(self.active_renderer().read_masks()?)
+    }
+
+    /// [`masks`](Self::masks) with `method`'s lookup.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn masks_of(&mut self, method: MethodKind, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
+        self.select_lookup(method)?;
+        let masks = self.masks(matrix);
+        self.use_spsm = false;
+        masks
+    }
+
+    /// [`color`](Self::color) with `method`'s lookup.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn color_of(&mut self, method: MethodKind, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
+        self.select_lookup(method)?;
+        let color = self.color(matrix);
+        self.use_spsm = false;
+        color
     }
 
     /// The camera's color image with `matrix` (for the report's pictures).
@@ -456,7 +562,7 @@ impl<'a> Runner<'a> {
     /// Renderer failures.
     pub fn color(&mut self, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
         self.render_view(matrix)?;
-        Ok(self.renderer.read_color()?)
+        Ok(self.active_renderer().read_color()?)
     }
 
     /// Ground truth for `light`: ray cast, or the focused 4000² map.
@@ -483,19 +589,24 @@ impl<'a> Runner<'a> {
         problem: &ShadowProblem,
         nearest: Option<f64>,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
+        use MethodKind as K;
         let p = match method {
-            MethodKind::Normal => Parameterization::Normal,
-            MethodKind::Focused => Parameterization::Focused,
-            MethodKind::LiSpsm => Parameterization::LiSpsm(Default::default()),
-            MethodKind::Psm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
-            MethodKind::PlaneOptimal => Parameterization::PlaneOptimal(Default::default()),
-            MethodKind::Optimized | MethodKind::OptimizedArgmin => {
-                let strategy = if method == MethodKind::Optimized {
+            K::Normal | K::NormalSpsm => Parameterization::Normal,
+            K::Focused | K::FocusedSpsm => Parameterization::Focused,
+            K::LiSpsm | K::LiSpsmSpsm => Parameterization::LiSpsm(Default::default()),
+            K::Psm | K::PsmSpsm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
+            K::PlaneOptimal | K::PlaneOptimalSpsm => Parameterization::PlaneOptimal(Default::default()),
+            K::Optimized | K::OptimizedArgmin | K::OptimizedSpsm | K::OptimizedArgminSpsm => {
+                let strategy = if method.base() == MethodKind::Optimized {
                     SearchStrategy::Paper
                 } else {
                     SearchStrategy::NelderMead { max_iterations: 150 }
                 };
-                return self.settle(problem, strategy);
+                // The frame loop's analysis bits come from the method's lookup.
+                self.select_lookup(method)?;
+                let settled = self.settle(problem, strategy);
+                self.use_spsm = false;
+                return settled;
             }
         };
         let m = problem.solve(&p)?;
@@ -510,7 +621,8 @@ impl<'a> Runner<'a> {
         strategy: SearchStrategy,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
         let options = OptimizeOptions { strategy, ..Default::default() };
-        let settled = settle(&mut self.renderer, problem, options, self.config.max_optimize_frames)?;
+        let max_frames = self.config.max_optimize_frames;
+        let settled = settle(self.active_renderer(), problem, options, max_frames)?;
         let note = settled.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
         Ok((settled.matrix, settled.frames, note))
     }
@@ -539,7 +651,7 @@ impl<'a> Runner<'a> {
         for &method in &self.config.methods {
             let result = match self.matrix(method, &problem, nearest) {
                 Ok((m, frames, note)) => {
-                    let masks = self.masks(&m)?;
+                    let masks = self.masks_of(method, &m)?;
                     MethodResult { matrix: Some(m), counts: Some(Counts::compare(&masks, &truth)), frames, note }
                 }
                 Err(ExperimentError::Solver(e)) => {
@@ -567,7 +679,7 @@ impl<'a> Runner<'a> {
             let nearest = nearest_view_depth(&self.camera, &truth);
             let problem = self.problem(light, map)?;
             if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
-                total += Counts::compare(&self.masks(&m)?, &truth).misclassified() as f64;
+                total += Counts::compare(&self.masks_of(method, &m)?, &truth).misclassified() as f64;
                 n += 1;
             }
         }

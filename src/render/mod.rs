@@ -38,6 +38,7 @@ mod culling;
 mod output;
 mod passes;
 pub mod readback;
+pub mod spsm;
 mod timing;
 mod uniforms;
 
@@ -52,6 +53,7 @@ use crate::{Camera, LightMatrix};
 pub use analysis::{AnalysisMeta, AnalysisReadback};
 pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
+pub use spsm::{ShadowLookup, SpsmOptions};
 pub use timing::GpuFrameTimes;
 pub use uniforms::MAX_LIGHTS;
 
@@ -248,6 +250,9 @@ pub struct RendererOptions {
     /// outside its clip volume (the output is the same; see
     /// [`FrameReport::shadow_triangles`]).
     pub cull_objects: bool,
+    /// How the camera and analysis passes look shadows up (the shadow
+    /// passes follow: SPSM lookups get SPSM passes, see [`spsm`]).
+    pub lookup: ShadowLookup,
 }
 
 impl Default for RendererOptions {
@@ -262,6 +267,7 @@ impl Default for RendererOptions {
             background: Vec3::new(0.55, 0.68, 0.85),
             timestamps: true,
             cull_objects: true,
+            lookup: ShadowLookup::Standard,
         }
     }
 }
@@ -354,6 +360,8 @@ pub struct Renderer {
     analysis_depth: Option<Target>,
     ring: ReadbackRing<AnalysisMeta>,
     timer: Option<GpuTimer>,
+    /// The SPSM pass and texels, with the SPSM lookup.
+    spsm: Option<(spsm::SpsmPass, spsm::SpsmTexels)>,
     frame: u64,
     /// Lights of the last frame (for reading maps back).
     last_lights: Vec<LightMatrix>,
@@ -425,12 +433,13 @@ impl Renderer {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
-                usage: wgpu::BufferUsages::VERTEX,
+                // Storage: the SPSM pass pulls whole triangles.
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
             }),
             indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene indices"),
                 contents: bytemuck::cast_slice(&indices),
-                usage: wgpu::BufferUsages::INDEX,
+                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
             }),
             index_count: indices.len() as u32,
             objects,
@@ -456,6 +465,17 @@ impl Renderer {
             options.readback_slots,
             analysis::padded_row_bytes(aw) * u64::from(ah),
         );
+        let spsm = options.lookup.spsm().map(|o| {
+            let pass = spsm::SpsmPass::new(
+                device,
+                o,
+                &gpu_scene.vertices,
+                &gpu_scene.indices,
+                MAX_SHADOW_SLOTS,
+                unclipped_available,
+            );
+            (pass, spsm::SpsmTexels::new(device, 1, 1, 1))
+        });
         Ok(Self {
             device: device.clone(),
             queue: queue.clone(),
@@ -463,7 +483,7 @@ impl Renderer {
             unclipped_available,
             scene: gpu_scene,
             shadow: ShadowPass::new(device, unclipped_available),
-            passes: ScenePasses::new(device),
+            passes: ScenePasses::new(device, &options.lookup),
             camera_uniforms,
             camera_bindings: lights_buffer("lixel camera pass lights"),
             analysis_bindings: lights_buffer("lixel analysis pass lights"),
@@ -474,6 +494,7 @@ impl Renderer {
                 .then(|| Target::new(device, "lixel analysis depth", passes::DEPTH_FORMAT, aw, ah)),
             ring,
             timer,
+            spsm,
             frame: 0,
             last_lights: Vec::new(),
             options,
@@ -584,6 +605,10 @@ impl Renderer {
             slots.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
         if !shadow_raw.is_empty() {
             self.queue.write_buffer(&self.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
+        }
+        if let Some((pass, _)) = &self.spsm {
+            let raw: Vec<spsm::SpsmPassRaw> = slots.iter().map(|m| spsm::SpsmPassRaw::to_raw(m)).collect();
+            self.queue.write_buffer(&pass.uniforms, 0, bytemuck::cast_slice(&raw));
         }
 
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -699,6 +724,10 @@ impl Renderer {
             );
             self.camera_bindings.bind_group = None;
             self.analysis_bindings.bind_group = None;
+            if let Some((_, texels)) = &mut self.spsm {
+                let maps = &self.shadow_maps;
+                *texels = spsm::SpsmTexels::new(&self.device, maps.width, maps.height, maps.layers());
+            }
         }
         if self.camera_targets.as_ref().is_none_or(|t| t.width != width || t.height != height) {
             self.camera_targets = Some(CameraTargets::new(&self.device, "lixel camera", width, height));
@@ -720,6 +749,12 @@ impl Renderer {
                         resource: wgpu::BindingResource::TextureView(&self.shadow_maps.array_view),
                     },
                 ];
+                if let Some((_, texels)) = &self.spsm {
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(&texels.array_view),
+                    });
+                }
                 if let Some((depth, masks)) = views {
                     entries
                         .push(wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(depth) });
@@ -746,6 +781,9 @@ impl Renderer {
         let mut unavailable = 0;
         let mut triangles = 0;
         let last = slots.len().saturating_sub(1);
+        if let Some((pass, texels)) = &self.spsm {
+            return self.encode_spsm_passes(encoder, slots, timer, pass, texels);
+        }
         for (i, m) in slots.iter().enumerate() {
             // Linear light depth grows away from the light whatever the
             // matrix's own depth row does, so the ordinary test always applies.
@@ -788,6 +826,58 @@ impl Renderer {
             triangles += self.draw_scene(&mut pass, &m.clip_from_world, !unclipped);
         }
         (unavailable, triangles)
+    }
+
+    /// The SPSM passes (instead of the depth-only ones): one per slot,
+    /// conservative, into the slot's depth layer and SPSM texel layer.
+    fn encode_spsm_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slots: &[&LightMatrix],
+        timer: Option<&timing::FrameQueries>,
+        pass_data: &spsm::SpsmPass,
+        texels: &spsm::SpsmTexels,
+    ) -> (u32, u64) {
+        let mut triangles = 0;
+        let last = slots.len().saturating_sub(1);
+        for (i, m) in slots.iter().enumerate() {
+            let timestamp_writes = self
+                .timer
+                .as_ref()
+                .zip(timer)
+                .and_then(|(t, q)| t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last));
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(&format!("lixel spsm pass {i}")),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &texels.layer_views[i],
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(spsm::empty_clear()), store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: Some(depth_attachment(&self.shadow_maps.layer_views[i])),
+                timestamp_writes,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            let (w, h) = (m.map_size.width, m.map_size.height);
+            pass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
+            pass.set_scissor_rect(0, 0, w, h);
+            pass.set_pipeline(&pass_data.pipeline);
+            pass.set_bind_group(0, &pass_data.bind_group, &[(i as u64 * spsm::SLOT_STRIDE) as u32]);
+            // Vertex pulling: vertex_index is the index slot. Depth is the
+            // pass's own (never clipped), so culling ignores near and far; an
+            // object outside the map's xy touches none of its texels.
+            if self.options.cull_objects {
+                for range in culling::visible_ranges(&self.scene.objects, &m.clip_from_world, false) {
+                    triangles += u64::from(range.len() as u32 / 3);
+                    pass.draw(range, 0..1);
+                }
+            } else {
+                pass.draw(0..self.scene.index_count, 0..1);
+                triangles += u64::from(self.scene.index_count / 3);
+            }
+        }
+        (0, triangles)
     }
 
     /// Draws the scene, less the objects outside the clip volume of

@@ -95,6 +95,22 @@ impl Renderer {
         Ok(DepthImage { width, height, depth: bytemuck::cast_slice(&bytes).to_vec() })
     }
 
+    /// Light `light`'s SPSM texels from the last frame (row-major, rows top
+    /// to bottom; see [`spsm::packing`](super::spsm::packing)). Blocks until
+    /// the GPU is done. `Ok(None)` when the renderer's lookup is not SPSM.
+    ///
+    /// # Errors
+    /// [`RenderError::NoSuchLight`]; mapping or polling failures.
+    pub fn read_spsm_texels(&self, light: usize) -> Result<Option<Vec<[u32; 4]>>, RenderError> {
+        let matrix =
+            self.last_lights.get(light).ok_or(RenderError::NoSuchLight { light, count: self.last_lights.len() })?;
+        let Some((_, texels)) = &self.spsm else { return Ok(None) };
+        let (width, height) = (matrix.map_size.width, matrix.map_size.height);
+        let bytes =
+            self.read_texture(&texels.texture, wgpu::TextureAspect::All, light as u32, width, height, 16)?;
+        Ok(Some(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes).to_vec()))
+    }
+
     /// Copies the top-left `width x height` texels of one layer into a
     /// buffer and waits for it. Returns tightly packed rows.
     fn read_texture(

@@ -2,6 +2,7 @@
 
 use std::borrow::Cow;
 
+use super::spsm::ShadowLookup;
 use super::uniforms::{ShadowPassRaw, VertexRaw, MAX_LIGHTS, SHADOW_SLOT_STRIDE};
 
 /// Depth format of shadow maps and camera depth buffers.
@@ -15,11 +16,8 @@ pub(crate) const MASKS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32
 /// pass's own lights.
 pub(crate) const MAX_SHADOW_SLOTS: usize = 2 * MAX_LIGHTS;
 
-fn scene_shader(device: &wgpu::Device, label: &str, source: &'static str) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
-    })
+fn scene_shader(device: &wgpu::Device, label: &str, source: Cow<'static, str>) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source) })
 }
 
 /// The depth-only pass: twelve pipelines (depth test normal/reversed x depth
@@ -39,7 +37,10 @@ impl ShadowPass {
         let module = scene_shader(
             device,
             "lixel shadow shader",
-            concat!(include_str!("../../shaders/light_depth.wgsl"), include_str!("../../shaders/shadow.wgsl")),
+            Cow::Borrowed(concat!(
+                include_str!("../../shaders/light_depth.wgsl"),
+                include_str!("../../shaders/shadow.wgsl")
+            )),
         );
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel shadow bind group layout"),
@@ -154,7 +155,8 @@ impl ShadowPass {
 /// The camera and analysis passes: the camera pass and the geometry
 /// analysis share the vertex stage; the depth analysis draws one full-screen
 /// triangle. The analysis layout adds the camera pass's depth (binding 3)
-/// and masks (binding 4).
+/// and masks (binding 4). With the SPSM lookup both layouts add the SPSM
+/// texels (binding 5) and the shaders use `spsm_lookup.wgsl`'s `in_shadow`.
 pub(crate) struct ScenePasses {
     pub(crate) camera_layout: wgpu::BindGroupLayout,
     pub(crate) analysis_layout: wgpu::BindGroupLayout,
@@ -165,18 +167,17 @@ pub(crate) struct ScenePasses {
 }
 
 impl ScenePasses {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
+    pub(crate) fn new(device: &wgpu::Device, lookup: &ShadowLookup) -> Self {
         // WGSL has no includes: the shared declarations are prepended.
-        let camera_source = concat!(
-            include_str!("../../shaders/light_depth.wgsl"),
-            include_str!("../../shaders/common.wgsl"),
-            include_str!("../../shaders/camera.wgsl")
-        );
-        let analysis_source = concat!(
-            include_str!("../../shaders/light_depth.wgsl"),
-            include_str!("../../shaders/common.wgsl"),
-            include_str!("../../shaders/analysis.wgsl")
-        );
+        let source = |pass: &'static str| -> Cow<'static, str> {
+            let common = include_str!("../../shaders/common.wgsl");
+            match lookup.spsm() {
+                None => Cow::Owned(format!("{}{common}{pass}", include_str!("../../shaders/light_depth.wgsl"))),
+                Some(options) => Cow::Owned(super::spsm::scene_source(options, common, pass)),
+            }
+        };
+        let camera_source = source(include_str!("../../shaders/camera.wgsl"));
+        let analysis_source = source(include_str!("../../shaders/analysis.wgsl"));
         let camera_module = scene_shader(device, "lixel camera shader", camera_source);
         let analysis_module = scene_shader(device, "lixel analysis shader", analysis_source);
         let uniform = |binding| wgpu::BindGroupLayoutEntry {
@@ -200,9 +201,11 @@ impl ScenePasses {
             count: None,
         };
         let scene_entries = [uniform(0), uniform(1), depth_texture(2, wgpu::TextureViewDimension::D2Array)];
+        let spsm_entry = lookup.spsm().map(|_| super::spsm::texels_layout_entry());
+        let camera_entries: Vec<_> = scene_entries.iter().copied().chain(spsm_entry).collect();
         let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel camera bind group layout"),
-            entries: &scene_entries,
+            entries: &camera_entries,
         });
         let analysis_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel analysis bind group layout"),
@@ -221,7 +224,10 @@ impl ScenePasses {
                     },
                     count: None,
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(spsm_entry)
+            .collect::<Vec<_>>(),
         });
         let pipeline_layout = |label, layout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
