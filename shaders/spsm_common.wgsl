@@ -18,17 +18,17 @@
 //            centre, in texels, as two f16 each (pack2x16float);
 //   w:       bits 31..16: zeta at the texel centre on the triangle's plane,
 //            16-bit unorm over [-1/16, 17/16];
-//            bits 15..8 / 7..0: dzeta/dx and dzeta/dy in the paper's
-//            power-quantized 8-bit code (eq. 3), in units of the map's
-//            [0, 1] extent per axis (texel slope times the map size).
-//   x = 0xffffffff: no triangle; then w & 0xffff = 0xffff means an empty
-//   texel (nothing drawn) and anything else a depth-only texel (a triangle
+//            bits 15..8 / 7..0: 1 + dzeta/dx and 1 + dzeta/dy in the
+//            paper's power-quantized 8-bit code (eq. 3, codes 0..=254), in
+//            units of the map's [0, 1] extent per axis (texel slope times
+//            the map size).
+//   w & 0xffff = 0: no triangle. All words zero (the cleared value) is an
+//   empty texel (nothing drawn); x = 1 a depth-only texel (a triangle
 //   crossing the light's w = 0 plane, rasterized the standard way).
 
 const SPSM_DEPTH_LO: f32 = -0.0625;
 const SPSM_DEPTH_SPAN: f32 = 1.125;
-const SPSM_NO_TRIANGLE: u32 = 0xffffffffu;
-const SPSM_EMPTY_LOW: u32 = 0xffffu;
+const SPSM_DEPTH_ONLY: u32 = 1u;
 const SPSM_HALF_PI: f32 = 1.5707963;
 // Largest normalized slope angle: tan stays finite.
 const SPSM_MAX_ANGLE: f32 = 0.999999;
@@ -191,16 +191,16 @@ fn spsm_decode(words: vec4<u32>, texel: vec2<i32>, map_size: vec2<f32>) -> SpsmT
     var out: SpsmTexel;
     out.centre = vec2<f32>(texel) + 0.5;
     out.depth = spsm_decode_depth(words.w >> 16u);
-    if words.x == SPSM_NO_TRIANGLE {
-        out.kind = select(1u, 2u, (words.w & 0xffffu) == SPSM_EMPTY_LOW);
+    if (words.w & 0xffffu) == 0u {
+        out.kind = select(2u, 1u, words.x == SPSM_DEPTH_ONLY);
         return out;
     }
     out.kind = 0u;
     out.v0 = out.centre + unpack2x16float(words.x);
     out.v1 = out.centre + unpack2x16float(words.y);
     out.v2 = out.centre + unpack2x16float(words.z);
-    let qx = (words.w >> 8u) & 0xffu;
-    let qy = words.w & 0xffu;
+    let qx = ((words.w >> 8u) & 0xffu) - 1u;
+    let qy = (words.w & 0xffu) - 1u;
     out.gradient = vec2<f32>(spsm_decode_slope(f32(qx)), spsm_decode_slope(f32(qy))) / map_size;
     out.gradient_error = vec2<f32>(spsm_slope_error(qx), spsm_slope_error(qy)) / map_size;
     return out;

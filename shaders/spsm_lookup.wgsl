@@ -1,7 +1,6 @@
-// SPSM lookup (Lecocq et al. 2014, section 4), replacing `in_shadow` of
-// common.wgsl when the renderer's lookup is SPSM (the standard one is
-// renamed `in_shadow_standard`). spsm_common.wgsl is prepended; the renderer
-// also prepends SPSM_TANGENTS, the 3x3 pattern -> silhouette normal table.
+// SPSM lookup (Lecocq et al. 2014, section 4): `in_shadow` of the lookup
+// mode ShadowLookup::Spsm, after common.wgsl. spsm_common.wgsl is
+// prepended, and SPSM_TANGENTS, the 3x3 pattern -> silhouette normal table.
 //
 // For a receiver p (texel position, depth zeta = z / w of the light matrix):
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
@@ -21,7 +20,9 @@
 // the [0, 1] depth range by default) plus, when SPSM_TOLERANCE is 1, the
 // packing's own error bound on the extrapolated plane.
 
-@group(0) @binding(5) var spsm_texels: texture_2d_array<u32>;
+// Group 1 is the mode's maps (src/render/lookup.rs): binding 0 the depth
+// array (the consistent minimum depth, unused here), binding 1 the texels.
+@group(1) @binding(1) var spsm_texels: texture_2d_array<u32>;
 
 fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
     if any(k < vec2<i32>(0)) || any(k >= vec2<i32>(light.map_size)) {

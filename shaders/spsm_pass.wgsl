@@ -24,13 +24,16 @@
 // projected: it is drawn with its clip coordinates (the hardware clips it)
 // and stores a depth-only texel (standard shadow-map test there).
 
-struct SpsmPass {
+// `ShadowPassRaw` (src/render/uniforms.rs), shared with shadow.wgsl; this
+// pass reads the matrix and the map size (clamp.yz).
+struct ShadowPass {
     clip_from_world: mat4x4<f32>,
-    // xy: map size in texels.
-    map: vec4<f32>,
+    position: vec4<f32>,
+    depth: vec4<f32>,
+    clamp: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> spsm_pass: SpsmPass;
+@group(0) @binding(0) var<uniform> shadow_pass: ShadowPass;
 // The scene's VertexRaw words (7 per vertex: position xyz, normal xyz, albedo).
 @group(0) @binding(1) var<storage, read> scene_vertices: array<u32>;
 @group(0) @binding(2) var<storage, read> scene_indices: array<u32>;
@@ -48,16 +51,16 @@ struct SpsmVertex {
 fn spsm_clip_of(index_slot: u32) -> vec4<f32> {
     let v = scene_indices[index_slot] * 7u;
     let p = vec3<f32>(bitcast<f32>(scene_vertices[v]), bitcast<f32>(scene_vertices[v + 1u]), bitcast<f32>(scene_vertices[v + 2u]));
-    return spsm_pass.clip_from_world * vec4<f32>(p, 1.0);
+    return shadow_pass.clip_from_world * vec4<f32>(p, 1.0);
 }
 
 fn spsm_to_texel(clip: vec4<f32>) -> vec2<f32> {
     let ndc = clip.xy / clip.w;
-    return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * spsm_pass.map.xy;
+    return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * shadow_pass.clamp.yz;
 }
 
 fn spsm_texel_to_clip(t: vec2<f32>) -> vec4<f32> {
-    let n = t / spsm_pass.map.xy;
+    let n = t / shadow_pass.clamp.yz;
     return vec4<f32>(n.x * 2.0 - 1.0, 1.0 - n.y * 2.0, 0.5, 1.0);
 }
 
@@ -68,7 +71,7 @@ fn spsm_meet(n1: vec2<f32>, c1: f32, n2: vec2<f32>, c2: f32) -> vec2<f32> {
 }
 
 @vertex
-fn vs_spsm(@builtin(vertex_index) slot: u32) -> SpsmVertex {
+fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     let first = slot - slot % 3u;
     let corner = slot % 3u;
     var c = array<vec4<f32>, 3>(spsm_clip_of(first), spsm_clip_of(first + 1u), spsm_clip_of(first + 2u));
@@ -136,12 +139,12 @@ struct SpsmOutput {
 }
 
 @fragment
-fn fs_spsm(in: SpsmVertex) -> SpsmOutput {
+fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     var out: SpsmOutput;
     if in.mode == 1u {
         // Clipped fallback: the hardware's depth z / w at the texel centre.
         let zeta = in.clip.z;
-        out.texel = vec4<u32>(SPSM_NO_TRIANGLE, SPSM_NO_TRIANGLE, SPSM_NO_TRIANGLE, (spsm_encode_depth(zeta) << 16u) | 0xfeu);
+        out.texel = vec4<u32>(SPSM_DEPTH_ONLY, 0u, 0u, spsm_encode_depth(zeta) << 16u);
         out.depth = spsm_depth_key(zeta);
         return out;
     }
@@ -162,12 +165,12 @@ fn fs_spsm(in: SpsmVertex) -> SpsmOutput {
         zeta_c = in.zeta.x + dot(g, c - in.t0);
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
     }
-    let slopes = g * spsm_pass.map.xy;
+    let slopes = g * shadow_pass.clamp.yz;
     out.texel = vec4<u32>(
         spsm_pack_offset(in.t0 - c),
         spsm_pack_offset(in.t1 - c),
         spsm_pack_offset(in.t2 - c),
-        (spsm_encode_depth(zeta_c) << 16u) | (spsm_encode_slope(slopes.x) << 8u) | spsm_encode_slope(slopes.y),
+        (spsm_encode_depth(zeta_c) << 16u) | ((spsm_encode_slope(slopes.x) + 1u) << 8u) | (spsm_encode_slope(slopes.y) + 1u),
     );
     out.depth = spsm_depth_key(min_depth);
     return out;

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Parser, Subcommand};
 use glam::{DVec3, UVec2};
 use lixel::experiment::{
     self, ExperimentConfig, LightKind, MethodKind, Preset, Progress, SceneSource, TimingOptions, Truth,
@@ -36,34 +36,6 @@ enum Command {
     Methods(MethodsArgs),
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum PresetArg {
-    /// Small enough for CI (seconds to a minute).
-    Quick,
-    /// The main job: a few minutes on a 2-core machine.
-    Default,
-    /// The paper's setting: 1.1M triangles, 500 lights, 750² screen, 400² maps.
-    Paper,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum LightArg {
-    /// Point lights on a distant hemisphere (the paper's setting).
-    Point,
-    /// Directional (sun-like) lights from the hemisphere.
-    Directional,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum TruthArg {
-    /// Exact ray casting against every triangle.
-    Raytrace,
-    /// The paper's focused 4000x4000 map.
-    Focused4000,
-    /// Both; counts use ray casting, the report gives their agreement.
-    Both,
-}
-
 /// Which shadow lookup the experiment's methods use.
 #[derive(Clone, Copy, ValueEnum)]
 enum LookupArg {
@@ -79,10 +51,10 @@ enum LookupArg {
 struct ExperimentArgs {
     /// Starting point for every setting below.
     #[arg(long, value_enum, default_value = "default")]
-    preset: PresetArg,
+    preset: Preset,
     /// Light kind.
     #[arg(long, value_enum)]
-    light: Option<LightArg>,
+    light: Option<LightKind>,
     /// An OBJ file instead of the built-in scene.
     #[arg(long)]
     scene: Option<PathBuf>,
@@ -116,7 +88,7 @@ struct ExperimentArgs {
     methods: Option<Vec<String>>,
     /// Ground truth.
     #[arg(long, value_enum)]
-    truth: Option<TruthArg>,
+    truth: Option<Truth>,
     /// Configurations for the resolution equivalence (0 turns it off).
     #[arg(long)]
     equivalence: Option<usize>,
@@ -178,17 +150,8 @@ fn parse_vec3(s: &str) -> Result<DVec3, String> {
 }
 
 fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> {
-    let mut c = ExperimentConfig::preset(match args.preset {
-        PresetArg::Quick => Preset::Quick,
-        PresetArg::Default => Preset::Default,
-        PresetArg::Paper => Preset::Paper,
-    });
-    if let Some(l) = args.light {
-        c.light = match l {
-            LightArg::Point => LightKind::Point,
-            LightArg::Directional => LightKind::Directional,
-        };
-    }
+    let mut c = ExperimentConfig::preset(args.preset);
+    c.light = args.light.unwrap_or(c.light);
     if let Some(path) = &args.scene {
         c.scene = SceneSource::Obj(path.clone());
     } else if let Some(t) = args.triangles {
@@ -218,11 +181,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
         }
     }
     if let Some(t) = args.truth {
-        c.truth = match t {
-            TruthArg::Raytrace => Truth::RayCast,
-            TruthArg::Focused4000 => Truth::Focused4000,
-            TruthArg::Both => Truth::Both,
-        };
+        c.truth = t;
     }
     c.equivalence_configs = args.equivalence.unwrap_or(c.equivalence_configs);
     c.out.clone_from(&args.out);

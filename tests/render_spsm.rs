@@ -10,12 +10,10 @@ use glam::{DVec2, DVec3, UVec2, Vec3};
 use lixel::mesh::{Mesh, RayCaster, Role, Scene, SceneObject};
 use lixel::render::spsm::packing;
 use lixel::render::{Frame, Renderer, RendererOptions, ShadowLookup, SpsmOptions};
+
+const SPSM: ShadowLookup = ShadowLookup::Spsm(SpsmOptions::PAPER);
 use lixel::{Camera, Light, LightMatrix, Parameterization};
 use render_common::*;
-
-fn spsm_options() -> RendererOptions {
-    RendererOptions { lookup: ShadowLookup::Spsm(SpsmOptions::default()), ..Default::default() }
-}
 
 fn object(name: &str, mesh: Mesh, role: Role) -> SceneObject {
     SceneObject { name: name.into(), mesh, role, albedo: Vec3::splat(0.8) }
@@ -68,9 +66,10 @@ fn conservative_coverage_matches_the_cpu_reference() {
         .expect("camera");
     for light in [Light::directional(DVec3::new(0.2, -1.0, 0.1)), Light::point(DVec3::new(1.0, 15.0, -2.0))] {
         let m = matrices(&scene, &camera, &[light], 48, &Parameterization::Normal).remove(0);
-        let mut renderer = Renderer::new(&device, &queue, &scene, spsm_options()).unwrap();
-        renderer.render(&Frame { camera: &camera, lights: &[m], masks: false, analysis: None }).unwrap();
-        let texels = renderer.read_spsm_texels(0).unwrap().expect("spsm lookup");
+        let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+        let lights = [m];
+        renderer.render(&Frame { lookup: SPSM, ..Frame::new(&camera, &lights) }).unwrap();
+        let texels = renderer.read_map_words(0).unwrap().expect("spsm words");
         let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
         let projected: Vec<[DVec2; 3]> =
             shapes.iter().map(|t| [texel_of(&m, t[0]), texel_of(&m, t[1]), texel_of(&m, t[2])]).collect();
@@ -158,15 +157,15 @@ fn spsm_bits_agree_with_ray_cast() {
     let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 160, 160);
     let matrices = matrices(&scene, &camera, &lights, 256, &Parameterization::Focused);
     let mut counts = Vec::new();
-    for options in [RendererOptions::default(), spsm_options()] {
-        let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
-        renderer.render(&Frame { camera: &camera, lights: &matrices, masks: true, analysis: None }).unwrap();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    for lookup in [ShadowLookup::DepthCompare, SPSM] {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &matrices) }).unwrap();
         let gpu = renderer.read_masks().unwrap();
         let mut total = 0;
         for light in 0..lights.len() as u32 {
             let agreement = truth.agreement_away_from_boundaries(&gpu, light, 1);
-            eprintln!("{:?} light {light}: {agreement:?}", options.lookup);
-            assert!(agreement.fraction() >= 0.99, "{:?} light {light}: {agreement:?}", options.lookup);
+            eprintln!("{} light {light}: {agreement:?}", lookup.name());
+            assert!(agreement.fraction() >= 0.99, "{} light {light}: {agreement:?}", lookup.name());
             total += gpu.misclassified(&truth, light).unwrap();
         }
         counts.push(total);
@@ -203,9 +202,9 @@ fn thin_casters_keep_their_shadows() {
     assert!(expected > 200, "the ray cast sees the thin shadows: {expected}");
     let m = matrices(&scene, &camera, &lights, 256, &Parameterization::Normal);
     let mut found = Vec::new();
-    for options in [RendererOptions::default(), spsm_options()] {
-        let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
-        renderer.render(&Frame { camera: &camera, lights: &m, masks: true, analysis: None }).unwrap();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    for lookup in [ShadowLookup::DepthCompare, SPSM] {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &m) }).unwrap();
         let masks = renderer.read_masks().unwrap();
         let false_shadow = (0..truth.depth.len())
             .filter(|&i| truth.visible(i) && truth.shadow[i] & 1 == 0 && masks.shadow[i] & 1 == 1)

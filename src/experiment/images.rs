@@ -171,7 +171,7 @@ pub(super) fn extremes(
             let problem = runner.problem(light, config.map)?;
             let nearest = super::nearest_view_depth(runner.camera(), &truth);
             let Ok((matrix, _, _)) = runner.matrix(m, &problem, nearest) else { continue };
-            let masks = runner.masks_of(m, &matrix)?;
+            let masks = runner.masks_with(&matrix, m.lookup())?;
             let counts = Counts::compare(&masks, &truth);
             let path = dir.join(format!("{}-{which}-config{index}-{}px.png", m.name(), counts.misclassified()));
             save(&error_overlay(&masks, &truth), &path)?;

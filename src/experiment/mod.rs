@@ -25,19 +25,21 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, UVec2};
 
 use crate::mesh::{RayCaster, Scene, ShadowMasks};
-use crate::optimize::{OptimizeOptions, Optimizer, SampleOptions, SearchStrategy};
+use crate::optimize::{OptimizeOptions, SearchStrategy};
 use crate::render::{
-    AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces, ShadowLookup, SpsmOptions,
+    Frame, LoopError, LoopOptions, LoopPolicy, LoopView, RenderError, Renderer, RendererOptions, ShadowBias,
+    ShadowFaces, ShadowLookup, ShadowLoop, SpsmOptions,
 };
 use crate::{
-    Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, Samples, ShadowMapSize, ShadowProblem,
+    Camera, Light, LightMatrix, LixelError, Method, Parameterization, PsmOptions, ShadowMapSize, ShadowProblem,
 };
 
 pub use images::error_overlay;
 pub use report::{markdown, ConfigRow, MethodSummary, Summary};
 pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
 
-/// A method of the experiment.
+/// A method of the experiment: one of the library's [`Method`]s, the
+/// scene-optimized one with either search.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum MethodKind {
     /// Uniform around all receivers.
@@ -54,7 +56,8 @@ pub enum MethodKind {
     Optimized,
     /// Scene-optimized with argmin's Nelder–Mead.
     OptimizedArgmin,
-    /// `normal+spsm`: the normal matrix with the sub-pixel shadow-map lookup.
+    /// `normal+spsm`: the normal matrix with the sub-pixel shadow-map lookup
+    /// ([`ShadowLookup::Spsm`]).
     NormalSpsm,
     /// `focused+spsm`.
     FocusedSpsm,
@@ -64,7 +67,8 @@ pub enum MethodKind {
     PsmSpsm,
     /// `plane-optimal+spsm`.
     PlaneOptimalSpsm,
-    /// `optimized+spsm` (its frame loop's analysis bits come from the SPSM lookup too).
+    /// `optimized+spsm` (its frame loop's analysis bits come from the SPSM
+    /// lookup too).
     OptimizedSpsm,
     /// `optimized-argmin+spsm`.
     OptimizedArgminSpsm,
@@ -93,34 +97,7 @@ impl MethodKind {
         Self::OptimizedArgminSpsm,
     ];
 
-    /// Name used on the command line and in reports.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Normal => "normal",
-            Self::Focused => "focused",
-            Self::LiSpsm => "lispsm",
-            Self::Psm => "psm",
-            Self::PlaneOptimal => "plane-optimal",
-            Self::Optimized => "optimized",
-            Self::OptimizedArgmin => "optimized-argmin",
-            Self::NormalSpsm => "normal+spsm",
-            Self::FocusedSpsm => "focused+spsm",
-            Self::LiSpsmSpsm => "lispsm+spsm",
-            Self::PsmSpsm => "psm+spsm",
-            Self::PlaneOptimalSpsm => "plane-optimal+spsm",
-            Self::OptimizedSpsm => "optimized+spsm",
-            Self::OptimizedArgminSpsm => "optimized-argmin+spsm",
-        }
-    }
-
-    /// Parses [`name`](Self::name).
-    #[must_use]
-    pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().chain(Self::ALL_SPSM).find(|m| m.name() == name)
-    }
-
-    /// The matrix method (the standard-lookup variant).
+    /// The same matrix method with the standard lookup.
     #[must_use]
     pub fn base(self) -> Self {
         match Self::ALL_SPSM.iter().position(|&m| m == self) {
@@ -129,10 +106,11 @@ impl MethodKind {
         }
     }
 
-    /// The same matrix method with the SPSM lookup.
+    /// The same matrix method with the SPSM lookup (`<method>+spsm`).
     #[must_use]
     pub fn with_spsm(self) -> Self {
-        Self::ALL_SPSM[Self::ALL.iter().position(|&m| m == self.base()).expect("every base is in ALL")]
+        let base = self.base();
+        Self::ALL.iter().position(|&m| m == base).map_or(self, |i| Self::ALL_SPSM[i])
     }
 
     /// Whether it looks shadows up with sub-pixel shadow maps.
@@ -140,12 +118,60 @@ impl MethodKind {
     pub fn spsm(self) -> bool {
         self.base() != self
     }
+
+    /// The shadow lookup its camera pass and frame loop use.
+    #[must_use]
+    pub fn lookup(self) -> ShadowLookup {
+        if self.spsm() {
+            ShadowLookup::Spsm(SpsmOptions::default())
+        } else {
+            ShadowLookup::DepthCompare
+        }
+    }
+
+    /// The library's method behind it.
+    #[must_use]
+    pub fn method(self) -> Method {
+        match self.base() {
+            Self::Normal => Method::Normal,
+            Self::Focused => Method::Focused,
+            Self::LiSpsm => Method::LiSpsm,
+            Self::Psm => Method::Psm,
+            Self::PlaneOptimal => Method::PlaneOptimal,
+            _ => Method::Optimized,
+        }
+    }
+
+    /// Name used on the command line and in reports: the library's
+    /// [`Method::name`], with `-argmin` for the Nelder–Mead search and
+    /// `+spsm` for the sub-pixel shadow-map lookup.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::OptimizedArgmin => "optimized-argmin",
+            Self::NormalSpsm => "normal+spsm",
+            Self::FocusedSpsm => "focused+spsm",
+            Self::LiSpsmSpsm => "lispsm+spsm",
+            Self::PsmSpsm => "psm+spsm",
+            Self::PlaneOptimalSpsm => "plane-optimal+spsm",
+            Self::OptimizedSpsm => "optimized+spsm",
+            Self::OptimizedArgminSpsm => "optimized-argmin+spsm",
+            other => other.method().name(),
+        }
+    }
+
+    /// Parses [`name`](Self::name).
+    #[must_use]
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().chain(Self::ALL_SPSM).find(|m| m.name() == name)
+    }
 }
 
 /// Which ground truth the counts use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Truth {
     /// Exact ray casting (independent of every method). The default.
+    #[value(name = "raytrace")]
     RayCast,
     /// The paper's reference: a focused 4000x4000 map.
     Focused4000,
@@ -154,7 +180,7 @@ pub enum Truth {
 }
 
 /// Point lights on a distant hemisphere, or directional lights from it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum LightKind {
     /// Point lights (the paper's setting).
     Point,
@@ -214,7 +240,7 @@ pub struct ExperimentConfig {
 }
 
 /// Named presets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Preset {
     /// Small enough for CI (well under two minutes).
     Quick,
@@ -297,6 +323,15 @@ pub enum ExperimentError {
     /// The camera or a light is invalid.
     #[error("solver: {0}")]
     Solver(#[from] LixelError),
+}
+
+impl From<LoopError> for ExperimentError {
+    fn from(e: LoopError) -> Self {
+        match e {
+            LoopError::Render(e) => Self::Render(e),
+            LoopError::Solve(e) => Self::Solver(e),
+        }
+    }
 }
 
 /// Progress of a run, for a progress bar.
@@ -427,12 +462,6 @@ pub struct Runner<'a> {
     camera: Camera,
     caster: Option<RayCaster>,
     renderer: Renderer,
-    /// The renderer with the SPSM lookup, when a `+spsm` method runs.
-    spsm_renderer: Option<Renderer>,
-    /// Whether the next renders use `spsm_renderer`.
-    use_spsm: bool,
-    /// For creating `spsm_renderer` when first needed.
-    gpu: (wgpu::Device, wgpu::Queue),
 }
 
 impl std::fmt::Debug for Runner<'_> {
@@ -472,8 +501,7 @@ impl<'a> Runner<'a> {
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
         let options = experiment_renderer_options();
         let renderer = Renderer::new(device, queue, &scene, options)?;
-        let gpu = (device.clone(), queue.clone());
-        Ok(Self { config, scene, camera, caster, renderer, spsm_renderer: None, use_spsm: false, gpu })
+        Ok(Self { config, scene, camera, caster, renderer })
     }
 
     /// The camera.
@@ -497,32 +525,11 @@ impl<'a> Runner<'a> {
     }
 
     /// Renders the camera view with `matrix` (masks included) and waits for it.
-    fn render_view(&mut self, matrix: &LightMatrix) -> Result<(), ExperimentError> {
+    fn render_view(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<(), ExperimentError> {
         let lights = std::slice::from_ref(matrix);
-        let camera = self.camera;
-        let renderer = self.active_renderer();
-        let report = renderer.render(&Frame { camera: &camera, lights, masks: true, analysis: None })?;
-        Ok(renderer.wait_for(&report.submission)?)
-    }
-
-    /// The renderer of the current lookup (standard unless a `+spsm` method runs).
-    fn active_renderer(&mut self) -> &mut Renderer {
-        match (&mut self.spsm_renderer, self.use_spsm) {
-            (Some(r), true) => r,
-            _ => &mut self.renderer,
-        }
-    }
-
-    /// Chooses the lookup of the following renders, for `method`; creates the
-    /// SPSM renderer when first needed.
-    fn select_lookup(&mut self, method: MethodKind) -> Result<(), ExperimentError> {
-        self.use_spsm = method.spsm();
-        if self.use_spsm && self.spsm_renderer.is_none() {
-            let options =
-                RendererOptions { lookup: ShadowLookup::Spsm(SpsmOptions::default()), ..experiment_renderer_options() };
-            self.spsm_renderer = Some(Renderer::new(&self.gpu.0, &self.gpu.1, &self.scene, options)?);
-        }
-        Ok(())
+        let report =
+            self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup })?;
+        Ok(self.renderer.wait_for(&report.submission)?)
     }
 
     /// Renders the camera view with `matrix` and reads back its masks.
@@ -530,30 +537,17 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn masks(&mut self, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
-        self.render_view(matrix)?;
-        Ok(self.active_renderer().read_masks()?)
+        self.masks_with(matrix, ShadowLookup::default())
     }
 
-    /// [`masks`](Self::masks) with `method`'s lookup.
+    /// [`masks`](Self::masks) with another lookup (a method's:
+    /// [`MethodKind::lookup`]).
     ///
     /// # Errors
     /// Renderer failures.
-    pub fn masks_of(&mut self, method: MethodKind, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
-        self.select_lookup(method)?;
-        let masks = self.masks(matrix);
-        self.use_spsm = false;
-        masks
-    }
-
-    /// [`color`](Self::color) with `method`'s lookup.
-    ///
-    /// # Errors
-    /// Renderer failures.
-    pub fn color_of(&mut self, method: MethodKind, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
-        self.select_lookup(method)?;
-        let color = self.color(matrix);
-        self.use_spsm = false;
-        color
+    pub fn masks_with(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<ShadowMasks, ExperimentError> {
+        self.render_view(matrix, lookup)?;
+        Ok(self.renderer.read_masks()?)
     }
 
     /// The camera's color image with `matrix` (for the report's pictures).
@@ -561,8 +555,16 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn color(&mut self, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
-        self.render_view(matrix)?;
-        Ok(self.active_renderer().read_color()?)
+        self.color_with(matrix, ShadowLookup::default())
+    }
+
+    /// [`color`](Self::color) with another lookup.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn color_with(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<image::RgbaImage, ExperimentError> {
+        self.render_view(matrix, lookup)?;
+        Ok(self.renderer.read_color()?)
     }
 
     /// Ground truth for `light`: ray cast, or the focused 4000² map.
@@ -597,16 +599,13 @@ impl<'a> Runner<'a> {
             K::Psm | K::PsmSpsm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
             K::PlaneOptimal | K::PlaneOptimalSpsm => Parameterization::PlaneOptimal(Default::default()),
             K::Optimized | K::OptimizedArgmin | K::OptimizedSpsm | K::OptimizedArgminSpsm => {
-                let strategy = if method.base() == MethodKind::Optimized {
+                let strategy = if method.base() == K::Optimized {
                     SearchStrategy::Paper
                 } else {
                     SearchStrategy::NelderMead { max_iterations: 150 }
                 };
-                // The frame loop's analysis bits come from the method's lookup.
-                self.select_lookup(method)?;
-                let settled = self.settle(problem, strategy);
-                self.use_spsm = false;
-                return settled;
+                // The loop's analysis bits come from the method's lookup.
+                return self.settle(problem, strategy, method.lookup());
             }
         };
         let m = problem.solve(&p)?;
@@ -614,17 +613,26 @@ impl<'a> Runner<'a> {
         Ok((m, 1, note))
     }
 
-    /// The scene-optimized frame loop at this configuration (see [`settle`]).
+    /// The scene-optimized frame loop at this configuration, paused at its
+    /// view until it settles ([`ShadowLoop::settle`]).
     fn settle(
         &mut self,
         problem: &ShadowProblem,
         strategy: SearchStrategy,
+        lookup: ShadowLookup,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
-        let options = OptimizeOptions { strategy, ..Default::default() };
-        let max_frames = self.config.max_optimize_frames;
-        let settled = settle(self.active_renderer(), problem, options, max_frames)?;
-        let note = settled.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
-        Ok((settled.matrix, settled.frames, note))
+        let optimize = OptimizeOptions { strategy, ..Default::default() };
+        let options = LoopOptions { optimize, lookup, ..Default::default() };
+        let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, options)?;
+        let view = LoopView {
+            camera: problem.camera(),
+            lights: std::slice::from_ref(problem.light()),
+            bounds: *problem.bounds(),
+            map: problem.map_size(),
+        };
+        let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
+        let note = settled.fallbacks[0].map(|f| format!("{f:?}")).unwrap_or_default();
+        Ok((settled.matrices[0], settled.frames, note))
     }
 
     /// Runs configuration `index`.
@@ -651,7 +659,7 @@ impl<'a> Runner<'a> {
         for &method in &self.config.methods {
             let result = match self.matrix(method, &problem, nearest) {
                 Ok((m, frames, note)) => {
-                    let masks = self.masks_of(method, &m)?;
+                    let masks = self.masks_with(&m, method.lookup())?;
                     MethodResult { matrix: Some(m), counts: Some(Counts::compare(&masks, &truth)), frames, note }
                 }
                 Err(ExperimentError::Solver(e)) => {
@@ -679,7 +687,7 @@ impl<'a> Runner<'a> {
             let nearest = nearest_view_depth(&self.camera, &truth);
             let problem = self.problem(light, map)?;
             if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
-                total += Counts::compare(&self.masks_of(method, &m)?, &truth).misclassified() as f64;
+                total += Counts::compare(&self.masks_with(&m, method.lookup())?, &truth).misclassified() as f64;
                 n += 1;
             }
         }
@@ -700,57 +708,6 @@ pub fn experiment_renderer_options() -> RendererOptions {
         bias: ShadowBias::default(),
         ..RendererOptions::default()
     }
-}
-
-/// The result of [`settle`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct Settled {
-    /// The matrix the loop settled on.
-    pub matrix: LightMatrix,
-    /// Frames (analysis passes) it took.
-    pub frames: usize,
-    /// The optimizer's last fallback, if any.
-    pub fallback: Option<crate::Fallback>,
-}
-
-/// The scene-optimized frame loop at a fixed view, as in a walkthrough that
-/// pauses: start from the focused map; each frame renders the analysis pass
-/// with the current matrix, reads it back and optimizes; stop when the
-/// optimizer keeps the previous matrix (no 20% median improvement), falls
-/// back, or after `max_frames`.
-///
-/// # Errors
-/// Renderer and solver failures.
-pub fn settle(
-    renderer: &mut Renderer,
-    problem: &ShadowProblem,
-    options: OptimizeOptions,
-    max_frames: usize,
-) -> Result<Settled, ExperimentError> {
-    let mut optimizer = Optimizer::new(options);
-    let mut matrix = problem.solve(&Parameterization::Focused)?;
-    let max_frames = max_frames.max(1);
-    for frame in 1..=max_frames {
-        let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
-        let lights = std::slice::from_ref(&matrix);
-        let report = renderer.render(&Frame { camera: problem.camera(), lights, masks: false, analysis })?;
-        renderer.wait_for(&report.submission)?;
-        let readback = loop {
-            if let Some(r) = renderer.try_take_analysis() {
-                break r;
-            }
-            renderer.wait_idle()?;
-        };
-        let bits = readback.optimizer_bits();
-        let input = readback.optimizer_input(&bits);
-        let samples = Samples::from_readback(problem, &input, 0, &SampleOptions::default())?;
-        let result = optimizer.optimize(&samples, Some(&matrix))?;
-        matrix = result.matrix;
-        if !result.report.accepted || result.report.fallback.is_some() {
-            return Ok(Settled { matrix, frames: frame, fallback: result.report.fallback });
-        }
-    }
-    Ok(Settled { matrix, frames: max_frames, fallback: None })
 }
 
 /// The smallest view depth of any visible pixel of `masks`.

@@ -12,17 +12,16 @@ pub struct DepthImage {
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// Depth in `[0, 1]` per texel (cleared value where nothing was drawn:
-    /// 1, or 0 under a reversed depth test).
+    /// Depth in `[0, 1]` per texel (1 where nothing was drawn).
     pub depth: Vec<f32>,
 }
 
 /// A picture of a shadow map: depth mapped to grey, nearest to the light
 /// brightest, normalised over the drawn texels; texels where nothing was
-/// drawn are dark blue. `reversed` tells which clear value means "empty".
+/// drawn (depth 1, the clear value) are dark blue.
 #[must_use]
-pub fn shadow_map_image(map: &DepthImage, reversed: bool) -> image::RgbaImage {
-    let empty = if reversed { 0.0 } else { 1.0 };
+pub fn shadow_map_image(map: &DepthImage) -> image::RgbaImage {
+    let empty = 1.0;
     let drawn = || map.depth.iter().copied().filter(move |&d| d != empty);
     let lo = drawn().fold(f32::INFINITY, f32::min);
     let hi = drawn().fold(f32::NEG_INFINITY, f32::max);
@@ -32,10 +31,7 @@ pub fn shadow_map_image(map: &DepthImage, reversed: bool) -> image::RgbaImage {
         if d == empty {
             return image::Rgba([20, 24, 60, 255]);
         }
-        let mut t = (d - lo) / span;
-        if !reversed {
-            t = 1.0 - t;
-        }
+        let t = 1.0 - (d - lo) / span;
         let g = (40.0 + 215.0 * t).round() as u8;
         image::Rgba([g, g, g, 255])
     })
@@ -84,30 +80,30 @@ impl Renderer {
         let matrix =
             self.last_lights.get(light).ok_or(RenderError::NoSuchLight { light, count: self.last_lights.len() })?;
         let (width, height) = (matrix.map_size.width, matrix.map_size.height);
-        let bytes = self.read_texture(
-            &self.shadow_maps.texture,
-            wgpu::TextureAspect::DepthOnly,
-            light as u32,
-            width,
-            height,
-            4,
-        )?;
+        let maps = &self.lookups[self.last_lookup.ok_or(RenderError::NothingRendered)?].maps;
+        let bytes = self.read_texture(&maps.depth, wgpu::TextureAspect::DepthOnly, light as u32, width, height, 4)?;
         Ok(DepthImage { width, height, depth: bytemuck::cast_slice(&bytes).to_vec() })
     }
 
-    /// Light `light`'s SPSM texels from the last frame (row-major, rows top
-    /// to bottom; see [`spsm::packing`](super::spsm::packing)). Blocks until
-    /// the GPU is done. `Ok(None)` when the renderer's lookup is not SPSM.
+    /// Light `light`'s per-texel words from the last frame, for lookup modes
+    /// that store more than depth (SPSM: see
+    /// [`spsm::packing`](super::spsm::packing)); row-major, rows top to
+    /// bottom. `Ok(None)` when the last frame's mode has only depth. Blocks
+    /// until the GPU is done.
     ///
     /// # Errors
-    /// [`RenderError::NoSuchLight`]; mapping or polling failures.
-    pub fn read_spsm_texels(&self, light: usize) -> Result<Option<Vec<[u32; 4]>>, RenderError> {
+    /// [`RenderError::NoSuchLight`]; [`RenderError::NothingRendered`];
+    /// mapping or polling failures.
+    pub fn read_map_words(&self, light: usize) -> Result<Option<Vec<[u32; 4]>>, RenderError> {
         let matrix =
             self.last_lights.get(light).ok_or(RenderError::NoSuchLight { light, count: self.last_lights.len() })?;
-        let Some((_, texels)) = &self.spsm else { return Ok(None) };
+        let maps = &self.lookups[self.last_lookup.ok_or(RenderError::NothingRendered)?].maps;
+        let Some(texture) = &maps.color else { return Ok(None) };
+        if texture.format() != wgpu::TextureFormat::Rgba32Uint {
+            return Ok(None);
+        }
         let (width, height) = (matrix.map_size.width, matrix.map_size.height);
-        let bytes =
-            self.read_texture(&texels.texture, wgpu::TextureAspect::All, light as u32, width, height, 16)?;
+        let bytes = self.read_texture(texture, wgpu::TextureAspect::All, light as u32, width, height, 16)?;
         Ok(Some(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes).to_vec()))
     }
 

@@ -4,12 +4,11 @@
 //!
 //! Texel words: `x, y, z` = the three vertices relative to the texel centre
 //! in texels, two IEEE half floats each (low half = x); `w` = 16-bit depth
-//! code (bits 31..16), then the x and y derivative codes (8 bits each).
+//! code (bits 31..16), then 1 + the x and y derivative codes (8 bits each).
+//! `w & 0xffff == 0`: no triangle (all zero: empty; `x == 1`: depth only).
 
 use glam::{DVec2, Vec2};
 
-/// `x` word of a texel without a triangle.
-pub const NO_TRIANGLE: u32 = u32::MAX;
 const DEPTH_LO: f64 = -0.0625;
 const DEPTH_SPAN: f64 = 1.125;
 const MAX_ANGLE: f64 = 0.999_999;
@@ -68,13 +67,13 @@ pub fn pack(vertices: [DVec2; 3], texel: [u32; 2], depth: f64, gradient: DVec2, 
     };
     let sx = encode_slope(gradient.x * f64::from(map[0]), exponent);
     let sy = encode_slope(gradient.y * f64::from(map[1]), exponent);
-    [half(vertices[0]), half(vertices[1]), half(vertices[2]), encode_depth(depth) << 16 | sx << 8 | sy]
+    [half(vertices[0]), half(vertices[1]), half(vertices[2]), encode_depth(depth) << 16 | (sx + 1) << 8 | (sy + 1)]
 }
 
 /// Decodes a texel at `texel`; `None` without a triangle.
 #[must_use]
 pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], exponent: f64) -> Option<DecodedTexel> {
-    if words[0] == NO_TRIANGLE {
+    if words[3] & 0xffff == 0 {
         return None;
     }
     let centre = DVec2::new(f64::from(texel[0]), f64::from(texel[1])) + 0.5;
@@ -87,7 +86,7 @@ pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], exponent: f64) ->
     Some(DecodedTexel {
         vertices: [vertex(words[0]), vertex(words[1]), vertex(words[2])],
         depth: decode_depth(words[3] >> 16),
-        gradient: DVec2::new(slope(words[3] >> 8 & 0xff, map[0]), slope(words[3] & 0xff, map[1])),
+        gradient: DVec2::new(slope((words[3] >> 8 & 0xff) - 1, map[0]), slope((words[3] & 0xff) - 1, map[1])),
     })
 }
 
@@ -190,7 +189,8 @@ mod tests {
             assert!((*a - b).length() < 1e-3, "{a} {b}");
         }
         assert!((back.depth - 0.4321).abs() < 1e-5);
-        assert!(unpack([NO_TRIANGLE, 0, 0, 0], [0, 0], [4, 4], 5.0).is_none());
+        assert!(unpack([0, 0, 0, 0], [0, 0], [4, 4], 5.0).is_none());
+        assert!(unpack([1, 0, 0, 0x1234_0000], [0, 0], [4, 4], 5.0).is_none());
     }
 
     #[test]
