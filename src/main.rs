@@ -37,7 +37,7 @@ enum Command {
 }
 
 /// Which shadow lookup the experiment's methods use.
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, clap::ValueEnum)]
 enum LookupArg {
     /// The methods as named (a `+spsm` suffix picks sub-pixel shadow maps).
     Standard,

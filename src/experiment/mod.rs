@@ -562,7 +562,11 @@ impl<'a> Runner<'a> {
     ///
     /// # Errors
     /// Renderer failures.
-    pub fn color_with(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<image::RgbaImage, ExperimentError> {
+    pub fn color_with(
+        &mut self,
+        matrix: &LightMatrix,
+        lookup: ShadowLookup,
+    ) -> Result<image::RgbaImage, ExperimentError> {
         self.render_view(matrix, lookup)?;
         Ok(self.renderer.read_color()?)
     }

@@ -270,8 +270,11 @@ impl ShadowPass {
             entries.push(wgpu::BindGroupEntry { binding: 1, resource: vertices.as_entire_binding() });
             entries.push(wgpu::BindGroupEntry { binding: 2, resource: indices.as_entire_binding() });
         }
-        let bind_group =
-            device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lixel shadow bind group"), layout: &layout, entries: &entries });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lixel shadow bind group"),
+            layout: &layout,
+            entries: &entries,
+        });
         let vertex_buffers = [Some(VertexRaw::position_layout())];
         let vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>] =
             if pulled.is_some() { &[] } else { &vertex_buffers };

@@ -101,7 +101,9 @@ fn tangent_table() -> String {
 
 /// The mode's shadow-pass WGSL (after `light_depth.wgsl`).
 pub(crate) fn pass_source(options: &SpsmOptions) -> String {
-    constants(options) + include_str!("../../../shaders/spsm_common.wgsl") + include_str!("../../../shaders/spsm_pass.wgsl")
+    constants(options)
+        + include_str!("../../../shaders/spsm_common.wgsl")
+        + include_str!("../../../shaders/spsm_pass.wgsl")
 }
 
 /// The mode's lookup WGSL (after `light_depth.wgsl` and `common.wgsl`).

@@ -59,7 +59,14 @@ pub struct DecodedTexel {
 /// a `map`-sized SPSM whose plane has depth `depth` at the texel centre and
 /// `gradient` per texel.
 #[must_use]
-pub fn pack(vertices: [DVec2; 3], texel: [u32; 2], depth: f64, gradient: DVec2, map: [u32; 2], exponent: f64) -> [u32; 4] {
+pub fn pack(
+    vertices: [DVec2; 3],
+    texel: [u32; 2],
+    depth: f64,
+    gradient: DVec2,
+    map: [u32; 2],
+    exponent: f64,
+) -> [u32; 4] {
     let centre = DVec2::new(f64::from(texel[0]), f64::from(texel[1])) + 0.5;
     let half = |v: DVec2| {
         let d = (v - centre).clamp(DVec2::splat(-60000.0), DVec2::splat(60000.0));
