@@ -215,7 +215,8 @@ impl ShadowLoop {
             }
         }
         let readback = readback.map(|r| ReadbackInfo { frame: r.frame, latency: r.latency, focused: r.tag });
-        let optimize_time = optimizing.elapsed();
+        // Zero for a policy without analysis: nothing was taken or optimized.
+        let optimize_time = if analyses { optimizing.elapsed() } else { Duration::ZERO };
 
         let solving = Instant::now();
         let matrices = match &self.policy {
