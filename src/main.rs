@@ -42,6 +42,17 @@ enum Command {
     Methods(MethodsArgs),
 }
 
+/// Which shadow lookup the experiment's methods use.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LookupArg {
+    /// The methods as named (a `+spsm` suffix picks sub-pixel shadow maps).
+    Standard,
+    /// Every method with the sub-pixel shadow-map lookup (`<method>+spsm`).
+    Spsm,
+    /// Every method twice: as named and with `+spsm`.
+    Both,
+}
+
 #[derive(clap::Args)]
 struct ExperimentArgs {
     /// Starting point for every setting below.
@@ -88,7 +99,8 @@ struct ExperimentArgs {
     /// Square shadow-map resolution.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     map: Option<u32>,
-    /// Comma-separated methods: normal, focused, lispsm, psm, plane-optimal, optimized, optimized-argmin.
+    /// Comma-separated methods: normal, focused, lispsm, psm, plane-optimal, optimized, optimized-argmin,
+    /// each optionally with `+spsm` (sub-pixel shadow-map lookup), e.g. focused+spsm.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Ground truth.
@@ -97,6 +109,9 @@ struct ExperimentArgs {
     /// Configurations for the resolution equivalence (0 turns it off).
     #[arg(long)]
     equivalence: Option<usize>,
+    /// Shadow lookup applied to every method (default: as named in --methods).
+    #[arg(long, value_enum)]
+    lookup: Option<LookupArg>,
     /// Report directory.
     #[arg(long, default_value = "report")]
     out: PathBuf,
@@ -237,6 +252,16 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
                 })
             })
             .collect::<Result<_, _>>()?;
+    }
+    match args.lookup {
+        None | Some(LookupArg::Standard) => {}
+        Some(LookupArg::Spsm) => c.methods = c.methods.iter().map(|m| m.with_spsm()).collect(),
+        Some(LookupArg::Both) => {
+            let spsm: Vec<MethodKind> = c.methods.iter().map(|m| m.with_spsm()).collect();
+            c.methods.extend(spsm);
+            let mut seen = std::collections::HashSet::new();
+            c.methods.retain(|m| seen.insert(*m));
+        }
     }
     if let Some(t) = args.truth {
         c.truth = t;

@@ -128,7 +128,7 @@ fn extremes(
             let problem = runner.problem(light, config.map)?;
             let nearest = nearest_view_depth(runner.camera(), &truth);
             let Ok((matrix, _, _)) = runner.matrix(m, &problem, nearest) else { continue };
-            let masks = runner.masks(&matrix)?;
+            let masks = runner.masks_with(&matrix, m.lookup())?;
             let misclassified = Counts::compare(&masks, &truth).misclassified();
             pictures.push(Picture {
                 method: m,

@@ -37,7 +37,7 @@ use crate::mesh::{LoadReport, RayCaster, Scene, SceneOptions, ShadowMasks};
 use crate::optimize::{OptimizeOptions, SearchStrategy};
 use crate::render::{
     Frame, LoopError, LoopOptions, LoopPolicy, LoopView, RenderError, Renderer, RendererOptions, ShadowBias,
-    ShadowFaces, ShadowLoop,
+    ShadowFaces, ShadowLookup, ShadowLoop, SpsmOptions,
 };
 use crate::{
     Camera, Light, LightMatrix, LixelError, Method, Parameterization, PsmOptions, ShadowMapSize, ShadowProblem,
@@ -72,6 +72,22 @@ pub enum MethodKind {
     Optimized,
     /// Scene-optimized with argmin's Nelder–Mead.
     OptimizedArgmin,
+    /// `normal+spsm`: the normal matrix with the sub-pixel shadow-map lookup
+    /// ([`ShadowLookup::Spsm`]).
+    NormalSpsm,
+    /// `focused+spsm`.
+    FocusedSpsm,
+    /// `lispsm+spsm`.
+    LiSpsmSpsm,
+    /// `psm+spsm`.
+    PsmSpsm,
+    /// `plane-optimal+spsm`.
+    PlaneOptimalSpsm,
+    /// `optimized+spsm` (its frame loop's analysis bits come from the SPSM
+    /// lookup too).
+    OptimizedSpsm,
+    /// `optimized-argmin+spsm`.
+    OptimizedArgminSpsm,
 }
 
 impl MethodKind {
@@ -86,25 +102,76 @@ impl MethodKind {
         Self::OptimizedArgmin,
     ];
 
+    /// Every method with the SPSM lookup (`<method>+spsm`), in report order.
+    pub const ALL_SPSM: [Self; 7] = [
+        Self::NormalSpsm,
+        Self::FocusedSpsm,
+        Self::LiSpsmSpsm,
+        Self::PsmSpsm,
+        Self::PlaneOptimalSpsm,
+        Self::OptimizedSpsm,
+        Self::OptimizedArgminSpsm,
+    ];
+
+    /// The same matrix method with the standard lookup.
+    #[must_use]
+    pub fn base(self) -> Self {
+        match Self::ALL_SPSM.iter().position(|&m| m == self) {
+            Some(i) => Self::ALL[i],
+            None => self,
+        }
+    }
+
+    /// The same matrix method with the SPSM lookup (`<method>+spsm`).
+    #[must_use]
+    pub fn with_spsm(self) -> Self {
+        let base = self.base();
+        Self::ALL.iter().position(|&m| m == base).map_or(self, |i| Self::ALL_SPSM[i])
+    }
+
+    /// Whether it looks shadows up with sub-pixel shadow maps.
+    #[must_use]
+    pub fn spsm(self) -> bool {
+        self.base() != self
+    }
+
+    /// The shadow lookup its camera pass and frame loop use.
+    #[must_use]
+    pub fn lookup(self) -> ShadowLookup {
+        if self.spsm() {
+            ShadowLookup::Spsm(SpsmOptions::default())
+        } else {
+            ShadowLookup::DepthCompare
+        }
+    }
+
     /// The library's method behind it.
     #[must_use]
     pub fn method(self) -> Method {
-        match self {
+        match self.base() {
             Self::Normal => Method::Normal,
             Self::Focused => Method::Focused,
             Self::LiSpsm => Method::LiSpsm,
             Self::Psm => Method::Psm,
             Self::PlaneOptimal => Method::PlaneOptimal,
-            Self::Optimized | Self::OptimizedArgmin => Method::Optimized,
+            _ => Method::Optimized,
         }
     }
 
     /// Name used on the command line and in reports: the library's
-    /// [`Method::name`], with `-argmin` for the Nelder–Mead search.
+    /// [`Method::name`], with `-argmin` for the Nelder–Mead search and
+    /// `+spsm` for the sub-pixel shadow-map lookup.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             Self::OptimizedArgmin => "optimized-argmin",
+            Self::NormalSpsm => "normal+spsm",
+            Self::FocusedSpsm => "focused+spsm",
+            Self::LiSpsmSpsm => "lispsm+spsm",
+            Self::PsmSpsm => "psm+spsm",
+            Self::PlaneOptimalSpsm => "plane-optimal+spsm",
+            Self::OptimizedSpsm => "optimized+spsm",
+            Self::OptimizedArgminSpsm => "optimized-argmin+spsm",
             other => other.method().name(),
         }
     }
@@ -112,7 +179,7 @@ impl MethodKind {
     /// Parses [`name`](Self::name).
     #[must_use]
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
+        Self::ALL.into_iter().chain(Self::ALL_SPSM).find(|m| m.name() == name)
     }
 }
 
@@ -587,15 +654,10 @@ impl<'a> Runner<'a> {
     }
 
     /// Renders the camera view with `matrix` (masks included) and waits for it.
-    fn render_view(&mut self, matrix: &LightMatrix) -> Result<(), ExperimentError> {
+    fn render_view(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<(), ExperimentError> {
         let lights = std::slice::from_ref(matrix);
-        let report = self.renderer.render(&Frame {
-            camera: &self.camera,
-            lights,
-            masks: true,
-            analysis: None,
-            lookup: Default::default(),
-        })?;
+        let report =
+            self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup })?;
         Ok(self.renderer.wait_for(&report.submission)?)
     }
 
@@ -604,7 +666,16 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn masks(&mut self, matrix: &LightMatrix) -> Result<ShadowMasks, ExperimentError> {
-        self.render_view(matrix)?;
+        self.masks_with(matrix, ShadowLookup::default())
+    }
+
+    /// [`masks`](Self::masks) with another lookup (a method's:
+    /// [`MethodKind::lookup`]).
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn masks_with(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<ShadowMasks, ExperimentError> {
+        self.render_view(matrix, lookup)?;
         Ok(self.renderer.read_masks()?)
     }
 
@@ -613,7 +684,19 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn color(&mut self, matrix: &LightMatrix) -> Result<image::RgbaImage, ExperimentError> {
-        self.render_view(matrix)?;
+        self.color_with(matrix, ShadowLookup::default())
+    }
+
+    /// [`color`](Self::color) with another lookup.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn color_with(
+        &mut self,
+        matrix: &LightMatrix,
+        lookup: ShadowLookup,
+    ) -> Result<image::RgbaImage, ExperimentError> {
+        self.render_view(matrix, lookup)?;
         Ok(self.renderer.read_color()?)
     }
 
@@ -641,19 +724,21 @@ impl<'a> Runner<'a> {
         problem: &ShadowProblem,
         nearest: Option<f64>,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
+        use MethodKind as K;
         let p = match method {
-            MethodKind::Normal => Parameterization::Normal,
-            MethodKind::Focused => Parameterization::Focused,
-            MethodKind::LiSpsm => Parameterization::LiSpsm(Default::default()),
-            MethodKind::Psm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
-            MethodKind::PlaneOptimal => Parameterization::PlaneOptimal(Default::default()),
-            MethodKind::Optimized | MethodKind::OptimizedArgmin => {
-                let strategy = if method == MethodKind::Optimized {
+            K::Normal | K::NormalSpsm => Parameterization::Normal,
+            K::Focused | K::FocusedSpsm => Parameterization::Focused,
+            K::LiSpsm | K::LiSpsmSpsm => Parameterization::LiSpsm(Default::default()),
+            K::Psm | K::PsmSpsm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
+            K::PlaneOptimal | K::PlaneOptimalSpsm => Parameterization::PlaneOptimal(Default::default()),
+            K::Optimized | K::OptimizedArgmin | K::OptimizedSpsm | K::OptimizedArgminSpsm => {
+                let strategy = if method.base() == K::Optimized {
                     SearchStrategy::Paper
                 } else {
                     SearchStrategy::NelderMead { max_iterations: 150 }
                 };
-                return self.settle(problem, strategy);
+                // The loop's analysis bits come from the method's lookup.
+                return self.settle(problem, strategy, method.lookup());
             }
         };
         let m = problem.solve(&p)?;
@@ -667,9 +752,11 @@ impl<'a> Runner<'a> {
         &mut self,
         problem: &ShadowProblem,
         strategy: SearchStrategy,
+        lookup: ShadowLookup,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
         let optimize = OptimizeOptions { strategy, ..Default::default() };
-        let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() })?;
+        let options = LoopOptions { optimize, lookup, ..Default::default() };
+        let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, options)?;
         let view = LoopView {
             camera: problem.camera(),
             lights: std::slice::from_ref(problem.light()),
@@ -705,7 +792,7 @@ impl<'a> Runner<'a> {
         for &method in &self.config.methods {
             let result = match self.matrix(method, &problem, nearest) {
                 Ok((m, frames, note)) => {
-                    let masks = self.masks(&m)?;
+                    let masks = self.masks_with(&m, method.lookup())?;
                     MethodResult { matrix: Some(m), counts: Some(Counts::compare(&masks, &truth)), frames, note }
                 }
                 Err(ExperimentError::Solver(e)) => {
@@ -733,7 +820,7 @@ impl<'a> Runner<'a> {
             let nearest = nearest_view_depth(&self.camera, &truth);
             let problem = self.problem(light, map)?;
             if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
-                total += Counts::compare(&self.masks(&m)?, &truth).misclassified() as f64;
+                total += Counts::compare(&self.masks_with(&m, method.lookup())?, &truth).misclassified() as f64;
                 n += 1;
             }
         }

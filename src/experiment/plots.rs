@@ -29,8 +29,13 @@ fn register_font() {
     });
 }
 
-/// Line colour of each method.
+/// Line colour of each method (a method with the SPSM lookup: its base
+/// method's hue, darker).
 fn color(method: MethodKind) -> RGBColor {
+    if method.spsm() {
+        let RGBColor(r, g, b) = color(method.base());
+        return RGBColor(r / 2, g / 2, b / 2);
+    }
     match method {
         MethodKind::Normal => RGBColor(120, 120, 120),
         MethodKind::Focused => RGBColor(31, 119, 180),
@@ -39,6 +44,7 @@ fn color(method: MethodKind) -> RGBColor {
         MethodKind::PlaneOptimal => RGBColor(255, 127, 14),
         MethodKind::Optimized => RGBColor(214, 39, 40),
         MethodKind::OptimizedArgmin => RGBColor(227, 119, 194),
+        _ => unreachable!("every SPSM method is mapped to its base above"),
     }
 }
 

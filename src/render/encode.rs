@@ -38,7 +38,9 @@ impl Renderer {
         let last = slots.len().saturating_sub(1);
         for (i, m) in slots.iter().enumerate() {
             let wanted = if m.needs_unclipped_depth { DepthClip::Unclipped } else { DepthClip::Clipped };
-            let (pipeline, clip) = state.shadow.pipeline(wanted, self.options.shadow_faces.cull(m));
+            // Conservative rasterization draws its own (reshaped) triangles: no culling.
+            let cull = if state.pulls_vertices { None } else { self.options.shadow_faces.cull(m) };
+            let (pipeline, clip) = state.shadow.pipeline(wanted, cull);
             if clip != wanted {
                 counts.unclipped_unavailable += 1;
             }
@@ -79,9 +81,29 @@ impl Renderer {
             pass.set_scissor_rect(0, 0, w, h);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &state.shadow.bind_group, &[(i as u64 * SHADOW_SLOT_STRIDE) as u32]);
-            counts.triangles += self.draw_scene(&mut pass, &m.clip_from_world, clip);
+            counts.triangles += if state.pulls_vertices {
+                // The pass's own depth is never clipped at near and far.
+                self.draw_pulled(&mut pass, &m.clip_from_world, DepthClip::Unclipped)
+            } else {
+                self.draw_scene(&mut pass, &m.clip_from_world, clip)
+            };
         }
         counts
+    }
+
+    /// [`draw_scene`](Self::draw_scene) for a pass that pulls its vertices:
+    /// non-indexed draws whose `vertex_index` is the index slot.
+    fn draw_pulled(&self, pass: &mut wgpu::RenderPass<'_>, clip_from_world: &glam::DMat4, clip: DepthClip) -> u64 {
+        if !self.options.cull_objects {
+            pass.draw(0..self.scene.index_count, 0..1);
+            return u64::from(self.scene.index_count / 3);
+        }
+        let mut triangles = 0;
+        for range in culling::visible_ranges(&self.scene.objects, clip_from_world, clip) {
+            triangles += u64::from(range.len() as u32 / 3);
+            pass.draw(range, 0..1);
+        }
+        triangles
     }
 
     /// Draws the scene, less the objects outside the clip volume of

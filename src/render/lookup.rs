@@ -14,6 +14,7 @@
 use std::borrow::Cow;
 
 use super::passes::{AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SHADOW_SLOTS};
+use super::spsm::{self, SpsmOptions};
 use super::uniforms::{ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
 
 /// How the camera and analysis passes look a point up in a light's map.
@@ -25,17 +26,23 @@ pub enum ShadowLookup {
     /// (`shaders/lookup_depth_compare.wgsl`).
     #[default]
     DepthCompare,
+    /// Sub-pixel shadow maps (Lecocq et al. 2014; see [`spsm`](super::spsm)):
+    /// conservatively rasterized maps holding the closest triangle per texel
+    /// (`shaders/spsm_pass.wgsl`), looked up with the triangles' planes and
+    /// the paper's silhouette recovery (`shaders/spsm_lookup.wgsl`).
+    Spsm(SpsmOptions),
 }
 
 impl ShadowLookup {
-    /// Every lookup mode.
-    pub const ALL: [ShadowLookup; 1] = [ShadowLookup::DepthCompare];
+    /// Every lookup mode (SPSM with its default options).
+    pub const ALL: [ShadowLookup; 2] = [ShadowLookup::DepthCompare, ShadowLookup::Spsm(SpsmOptions::PAPER)];
 
     /// A short stable name (for file names, CSV and logs).
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             Self::DepthCompare => "depth-compare",
+            Self::Spsm(_) => "spsm",
         }
     }
 
@@ -44,8 +51,15 @@ impl ShadowLookup {
         match self {
             Self::DepthCompare => LookupSpec {
                 map_color: None,
-                shadow_wgsl: include_str!("../../shaders/shadow.wgsl"),
-                lookup_wgsl: include_str!("../../shaders/lookup_depth_compare.wgsl"),
+                shadow_wgsl: Cow::Borrowed(include_str!("../../shaders/shadow.wgsl")),
+                lookup_wgsl: Cow::Borrowed(include_str!("../../shaders/lookup_depth_compare.wgsl")),
+                pulls_vertices: false,
+            },
+            Self::Spsm(options) => LookupSpec {
+                map_color: Some(spsm::TEXEL_FORMAT),
+                shadow_wgsl: Cow::Owned(spsm::pass_source(&options)),
+                lookup_wgsl: Cow::Owned(spsm::lookup_source(&options)),
+                pulls_vertices: true,
             },
         }
     }
@@ -62,10 +76,15 @@ struct LookupSpec {
     /// The shadow pass: `vs_shadow` and `fs_shadow`, after
     /// `shaders/light_depth.wgsl`, reading `ShadowPass` (uniforms.rs) at
     /// group 0 binding 0 with one dynamic-offset slot per map.
-    shadow_wgsl: &'static str,
+    shadow_wgsl: Cow<'static, str>,
     /// The lookup: its group-1 bindings and `fn in_shadow(light: Light,
     /// world: vec3<f32>) -> bool`, together with `shaders/common.wgsl`.
-    lookup_wgsl: &'static str,
+    lookup_wgsl: Cow<'static, str>,
+    /// The shadow pass pulls whole triangles itself: no vertex buffer, the
+    /// scene's vertex words and indices as read-only storage buffers at
+    /// group 0 bindings 1 and 2, non-indexed draws whose `vertex_index` is
+    /// the index slot, no face culling (conservative rasterization).
+    pulls_vertices: bool,
 }
 
 /// Whether a shadow pass clips depth at the light's near and far planes.
@@ -86,6 +105,8 @@ pub(crate) struct LookupState {
     maps_layout: wgpu::BindGroupLayout,
     map_color: Option<wgpu::TextureFormat>,
     pub(crate) maps: ShadowMaps,
+    /// See [`LookupSpec::pulls_vertices`].
+    pub(crate) pulls_vertices: bool,
 }
 
 impl LookupState {
@@ -94,6 +115,7 @@ impl LookupState {
         lookup: ShadowLookup,
         layouts: &SceneLayouts,
         unclipped_available: bool,
+        scene: (&wgpu::Buffer, &wgpu::Buffer),
     ) -> Self {
         let spec = lookup.spec();
         // Depth bound as unfilterable float: naga cannot translate
@@ -113,7 +135,7 @@ impl LookupState {
                 "{}{}{}{pass}",
                 include_str!("../../shaders/light_depth.wgsl"),
                 include_str!("../../shaders/common.wgsl"),
-                spec.lookup_wgsl
+                &spec.lookup_wgsl
             );
             wgpu::ShaderSource::Wgsl(Cow::Owned(source))
         };
@@ -128,19 +150,26 @@ impl LookupState {
             format!("lixel analysis shader ({})", lookup.name()),
             scene_source(include_str!("../../shaders/analysis.wgsl")),
         );
-        let shadow_source = format!("{}{}", include_str!("../../shaders/light_depth.wgsl"), spec.shadow_wgsl);
+        let shadow_source = format!("{}{}", include_str!("../../shaders/light_depth.wgsl"), &spec.shadow_wgsl);
         let shadow_module = module(
             format!("lixel shadow shader ({})", lookup.name()),
             wgpu::ShaderSource::Wgsl(Cow::Owned(shadow_source)),
         );
         Self {
             lookup,
-            shadow: ShadowPass::new(device, &shadow_module, spec.map_color, unclipped_available),
+            shadow: ShadowPass::new(
+                device,
+                &shadow_module,
+                spec.map_color,
+                unclipped_available,
+                spec.pulls_vertices.then_some(scene),
+            ),
             camera: CameraPass::new(device, &layouts.camera, &maps_layout, &camera_module),
             analysis: AnalysisPass::new(device, &layouts.analysis, &maps_layout, &analysis_module),
             maps: ShadowMaps::new(device, &maps_layout, spec.map_color, 1, 1, 1),
             maps_layout,
             map_color: spec.map_color,
+            pulls_vertices: spec.pulls_vertices,
         }
     }
 
@@ -191,19 +220,34 @@ impl ShadowPass {
         module: &wgpu::ShaderModule,
         map_color: Option<wgpu::TextureFormat>,
         unclipped_available: bool,
+        pulled: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
+            },
+            count: None,
+        }];
+        if pulled.is_some() {
+            layout_entries.extend([storage(1), storage(2)]);
+        }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel shadow bind group layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
-                },
-                count: None,
-            }],
+            entries: &layout_entries,
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lixel shadow pipeline layout"),
@@ -216,18 +260,26 @@ impl ShadowPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &uniforms,
+                offset: 0,
+                size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
+            }),
+        }];
+        if let Some((vertices, indices)) = pulled {
+            entries.push(wgpu::BindGroupEntry { binding: 1, resource: vertices.as_entire_binding() });
+            entries.push(wgpu::BindGroupEntry { binding: 2, resource: indices.as_entire_binding() });
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lixel shadow bind group"),
             layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &uniforms,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
-                }),
-            }],
+            entries: &entries,
         });
+        let vertex_buffers = [Some(VertexRaw::position_layout())];
+        let vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>] =
+            if pulled.is_some() { &[] } else { &vertex_buffers };
         let targets = [map_color.map(wgpu::ColorTargetState::from)];
         let targets: &[Option<wgpu::ColorTargetState>] = if map_color.is_some() { &targets } else { &[] };
         let pipelines = std::array::from_fn(|k| {
@@ -242,7 +294,7 @@ impl ShadowPass {
                         module,
                         entry_point: Some("vs_shadow"),
                         compilation_options: Default::default(),
-                        buffers: &[Some(VertexRaw::position_layout())],
+                        buffers: vertex_buffers,
                     },
                     primitive: wgpu::PrimitiveState {
                         // `ShadowFaces::Both` (no culling) by default: meshes from
@@ -298,6 +350,8 @@ impl ShadowPass {
 /// layer), and the group-1 bind group of the camera and analysis passes.
 pub(crate) struct ShadowMaps {
     pub(crate) depth_array: wgpu::TextureView,
+    /// The mode's colour array, if any.
+    pub(crate) color: Option<wgpu::Texture>,
     pub(crate) depth_layers: Vec<wgpu::TextureView>,
     pub(crate) color_layers: Vec<wgpu::TextureView>,
     pub(crate) bind_group: wgpu::BindGroup,
@@ -346,13 +400,13 @@ impl ShadowMaps {
                     })
                 })
                 .collect::<Vec<_>>();
-            (array_view, layer_views)
+            (texture, array_view, layer_views)
         };
-        let (depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
+        let (_, depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
         let color = color.map(|format| array("lixel shadow map words", format));
         let mut entries =
             vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&depth_array) }];
-        if let Some((view, _)) = &color {
+        if let Some((_, view, _)) = &color {
             entries.push(wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) });
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -360,8 +414,11 @@ impl ShadowMaps {
             layout,
             entries: &entries,
         });
-        let color_layers = color.map(|(_, layers)| layers).unwrap_or_default();
-        Self { depth_array, depth_layers, color_layers, bind_group, width, height }
+        let (color, color_layers) = match color {
+            Some((texture, _, layers)) => (Some(texture), layers),
+            None => (None, Vec::new()),
+        };
+        Self { depth_array, color, depth_layers, color_layers, bind_group, width, height }
     }
 
     pub(crate) fn layers(&self) -> u32 {

@@ -45,6 +45,7 @@ mod options;
 mod output;
 mod passes;
 pub mod readback;
+pub mod spsm;
 mod timing;
 mod uniforms;
 
@@ -63,6 +64,7 @@ pub use lookup::ShadowLookup;
 pub use options::{AnalysisSource, RendererOptions, ShadowBias, ShadowFaces};
 pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
+pub use spsm::SpsmOptions;
 pub use timing::GpuFrameTimes;
 pub use uniforms::MAX_LIGHTS;
 
@@ -345,12 +347,13 @@ impl Renderer {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
-                usage: wgpu::BufferUsages::VERTEX,
+                // Storage: the SPSM pass pulls whole triangles.
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
             }),
             indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene indices"),
                 contents: bytemuck::cast_slice(&indices),
-                usage: wgpu::BufferUsages::INDEX,
+                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
             }),
             index_count: indices.len() as u32,
             objects,
@@ -384,8 +387,9 @@ impl Renderer {
         };
         // The default lookup is built now, so that the first frame does not
         // pay for its pipelines.
+        let scene_buffers = (&gpu_scene.vertices, &gpu_scene.indices);
         let lookups = vec![device::capture(device, "shadow, camera and analysis pipelines", || {
-            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available)
+            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available, scene_buffers)
         })?];
         let ring = ReadbackRing::new(
             device,
@@ -564,8 +568,9 @@ impl Renderer {
         if let Some(i) = self.lookups.iter().position(|s| s.lookup == lookup) {
             return Ok(i);
         }
+        let scene = (&self.scene.vertices, &self.scene.indices);
         let state = device::capture(&self.device, "shadow, camera and analysis pipelines", || {
-            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available)
+            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available, scene)
         })?;
         self.lookups.push(state);
         Ok(self.lookups.len() - 1)

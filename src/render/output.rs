@@ -103,6 +103,28 @@ impl Renderer {
         Ok(DepthImage { width, height, depth })
     }
 
+    /// Light `light`'s per-texel words from the last frame, for lookup modes
+    /// that store more than depth (SPSM: see
+    /// [`spsm::packing`](super::spsm::packing)); row-major, rows top to
+    /// bottom. `Ok(None)` when the last frame's mode has only depth. Blocks
+    /// until the GPU is done.
+    ///
+    /// # Errors
+    /// [`RenderError::NoSuchLight`]; [`RenderError::NothingRendered`];
+    /// mapping or polling failures.
+    pub fn read_map_words(&self, light: usize) -> Result<Option<Vec<[u32; 4]>>, RenderError> {
+        let matrix =
+            self.last_lights.get(light).ok_or(RenderError::NoSuchLight { light, count: self.last_lights.len() })?;
+        let maps = &self.lookups[self.last_lookup.ok_or(RenderError::NothingRendered)?].maps;
+        let Some(texture) = &maps.color else { return Ok(None) };
+        if texture.format() != wgpu::TextureFormat::Rgba32Uint {
+            return Ok(None);
+        }
+        let (width, height) = (matrix.map_size.width, matrix.map_size.height);
+        let bytes = self.read_texture(texture, wgpu::TextureAspect::All, light as u32, width, height, 16)?;
+        Ok(Some(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes).to_vec()))
+    }
+
     /// Copies the top-left `width x height` texels of one layer into a
     /// buffer and waits for it. Returns tightly packed rows.
     fn read_texture(

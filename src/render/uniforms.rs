@@ -125,7 +125,7 @@ pub(crate) struct ShadowPassRaw {
     position: [f32; 4],
     /// Linear depth: (min distance, 1 / (max - min), constant bias, slope scale).
     depth: [f32; 4],
-    /// (bias clamp, 0, 0, 0).
+    /// (bias clamp, map width, map height, 0).
     clamp: [f32; 4],
     _pad: [f32; 36],
 }
@@ -140,7 +140,8 @@ impl ShadowPassRaw {
                 // Constant bias in units of 2^-24, the float spacing just below 1.
                 [min, inv_span, bias.constant as f32 * 2f32.powi(-24), bias.slope_scale]
             },
-            clamp: [bias.clamp, 0.0, 0.0, 0.0],
+            // yz: the map's size (the SPSM pass works in texels).
+            clamp: [bias.clamp, matrix.map_size.width as f32, matrix.map_size.height as f32, 0.0],
             _pad: [0.0; 36],
         }
     }

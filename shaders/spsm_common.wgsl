@@ -1,0 +1,225 @@
+// Sub-pixel shadow maps (Lecocq et al. 2014): the texel format and the
+// geometry shared by the SPSM pass (spsm_pass.wgsl) and the SPSM lookup
+// (spsm_lookup.wgsl). The renderer prepends constants SPSM_EXPONENT,
+// SPSM_BIAS and SPSM_TOLERANCE (see src/render/spsm/mod.rs).
+//
+// Space. Everything happens in the map's texel space (x right, y down,
+// texel k covers [k, k + 1)) with the matrix's own post-projective depth
+// zeta = clip.z / clip.w. lixel's *stored* standard depth is linear light
+// depth (distance along the rays), which is not affine on a triangle seen
+// by a point light; zeta is: for any linear q, q / w restricted to a plane
+// is affine in (x / w, y / w). zeta is monotone along every light ray (each
+// ray is a line of constant NDC xy and w is linear along it) and lies in
+// [0, 1] over the region the map must hold (lixel's DepthRange), so it is
+// the paper's depth z~ of "SPSM space".
+//
+// Texel (Rgba32Uint):
+//   x, y, z: the closest triangle's vertices v0, v1, v2 relative to the texel
+//            centre, in texels, as two f16 each (pack2x16float);
+//   w:       bits 31..16: zeta at the texel centre on the triangle's plane,
+//            16-bit unorm over [-1/16, 17/16];
+//            bits 15..8 / 7..0: 1 + dzeta/dx and 1 + dzeta/dy in the
+//            paper's power-quantized 8-bit code (eq. 3, codes 0..=254), in
+//            units of the map's [0, 1] extent per axis (texel slope times
+//            the map size).
+//   w & 0xffff = 0: no triangle. All words zero (the cleared value) is an
+//   empty texel (nothing drawn); x = 1 a depth-only texel (a triangle
+//   crossing the light's w = 0 plane, rasterized the standard way).
+
+const SPSM_DEPTH_LO: f32 = -0.0625;
+const SPSM_DEPTH_SPAN: f32 = 1.125;
+const SPSM_DEPTH_ONLY: u32 = 1u;
+const SPSM_HALF_PI: f32 = 1.5707963;
+// Largest normalized slope angle: tan stays finite.
+const SPSM_MAX_ANGLE: f32 = 0.999999;
+// Largest f16 vertex offset in texels (f16 max is 65504).
+const SPSM_MAX_OFFSET: f32 = 60000.0;
+
+fn spsm_encode_depth(z: f32) -> u32 {
+    return u32(round(clamp((z - SPSM_DEPTH_LO) / SPSM_DEPTH_SPAN, 0.0, 1.0) * 65535.0));
+}
+
+fn spsm_decode_depth(code: u32) -> f32 {
+    return f32(code) / 65535.0 * SPSM_DEPTH_SPAN + SPSM_DEPTH_LO;
+}
+
+// Eq. (3): Q(d) = 127 (1 + a^n), a = 2 atan(d) / pi (odd power: sign kept).
+fn spsm_encode_slope(d: f32) -> u32 {
+    let a = clamp(atan(d) / SPSM_HALF_PI, -SPSM_MAX_ANGLE, SPSM_MAX_ANGLE);
+    let q = 127.0 * (1.0 + sign(a) * pow(abs(a), SPSM_EXPONENT));
+    return u32(clamp(round(q), 0.0, 254.0));
+}
+
+// Eq. (4) for a (possibly fractional) code q.
+fn spsm_decode_slope(q: f32) -> f32 {
+    let s = clamp(q / 127.0 - 1.0, -1.0, 1.0);
+    if s == 0.0 {
+        return 0.0;
+    }
+    let a = clamp(sign(s) * pow(abs(s), 1.0 / SPSM_EXPONENT), -SPSM_MAX_ANGLE, SPSM_MAX_ANGLE);
+    return tan(a * SPSM_HALF_PI);
+}
+
+// Half a quantization step of code `q` around its decoded value.
+fn spsm_slope_error(q: u32) -> f32 {
+    let d = spsm_decode_slope(f32(q));
+    let lo = spsm_decode_slope(max(f32(q) - 0.5, 0.0));
+    let hi = spsm_decode_slope(min(f32(q) + 0.5, 254.0));
+    return max(abs(d - lo), abs(hi - d));
+}
+
+fn spsm_pack_offset(v: vec2<f32>) -> u32 {
+    return pack2x16float(clamp(v, vec2<f32>(-SPSM_MAX_OFFSET), vec2<f32>(SPSM_MAX_OFFSET)));
+}
+
+// Signed doubled area (texel space).
+fn spsm_cross(a: vec2<f32>, b: vec2<f32>) -> f32 {
+    return a.x * b.y - a.y * b.x;
+}
+
+// zeta gradient per texel of the plane through (t_k, z_k); zero for a
+// degenerate triangle.
+fn spsm_gradient(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, z: vec3<f32>) -> vec2<f32> {
+    let e1 = t1 - t0;
+    let e2 = t2 - t0;
+    let det = spsm_cross(e1, e2);
+    if abs(det) < 1e-12 {
+        return vec2<f32>(0.0);
+    }
+    let dz1 = z.y - z.x;
+    let dz2 = z.z - z.x;
+    return vec2<f32>(dz1 * e2.y - dz2 * e1.y, dz2 * e1.x - dz1 * e2.x) / det;
+}
+
+// Whether the texel box centred at `c` (half size 0.5) and the triangle
+// overlap (closed sets): separating axes x, y and the three edge normals.
+fn spsm_box_overlaps(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>) -> bool {
+    let lo = min(t0, min(t1, t2));
+    let hi = max(t0, max(t1, t2));
+    if any(lo > c + 0.5) || any(hi < c - 0.5) {
+        return false;
+    }
+    let orient = sign(spsm_cross(t1 - t0, t2 - t0));
+    if orient == 0.0 {
+        // A segment or a point: its bounding box decides, plus the line's normal.
+        let d = select(t1 - t0, t2 - t0, dot(t2 - t0, t2 - t0) > dot(t1 - t0, t1 - t0));
+        let n = vec2<f32>(-d.y, d.x);
+        return abs(dot(n, c - t0)) <= 0.5 * (abs(n.x) + abs(n.y));
+    }
+    var p = array<vec2<f32>, 3>(t0, t1, t2);
+    for (var k = 0u; k < 3u; k++) {
+        let a = p[k];
+        let b = p[(k + 1u) % 3u];
+        // Outward normal of edge a -> b.
+        let n = orient * vec2<f32>(b.y - a.y, a.x - b.x);
+        if dot(n, c - a) - 0.5 * (abs(n.x) + abs(n.y)) > 0.0 {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Distance of `p` inside clip plane k of the box [lo, hi] (>= 0: inside).
+fn spsm_plane_distance(k: u32, p: vec2<f32>, lo: vec2<f32>, hi: vec2<f32>) -> f32 {
+    switch k {
+        case 0u: { return p.x - lo.x; }
+        case 1u: { return hi.x - p.x; }
+        case 2u: { return p.y - lo.y; }
+        default: { return hi.y - p.y; }
+    }
+}
+
+// The paper's consistent minimum depth (section 4): the smallest depth of
+// the triangle's plane (zeta_c at `c`, gradient `g`) over the part of the
+// texel box at `c` the triangle covers. The triangle is clipped to the box
+// (Sutherland-Hodgman, at most 7 vertices) and the affine depth is minimal
+// at a vertex of the clipped polygon. Returns `fallback` when nothing is left.
+fn spsm_min_depth(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>, zeta_c: f32, g: vec2<f32>, fallback: f32) -> f32 {
+    var poly = array<vec2<f32>, 9>(t0, t1, t2, vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0));
+    var n = 3u;
+    let lo = c - 0.5;
+    let hi = c + 0.5;
+    for (var k = 0u; k < 4u; k++) {
+        var next: array<vec2<f32>, 9>;
+        var m = 0u;
+        for (var i = 0u; i < n; i++) {
+            let p = poly[i];
+            let q = poly[(i + 1u) % n];
+            let dp = spsm_plane_distance(k, p, lo, hi);
+            let dq = spsm_plane_distance(k, q, lo, hi);
+            if dp >= 0.0 && m < 9u {
+                next[m] = p;
+                m++;
+            }
+            if (dp >= 0.0) != (dq >= 0.0) && m < 9u {
+                next[m] = mix(p, q, dp / (dp - dq));
+                m++;
+            }
+        }
+        poly = next;
+        n = m;
+    }
+    if n == 0u {
+        return fallback;
+    }
+    var best = 3.0e38;
+    for (var i = 0u; i < n; i++) {
+        best = min(best, zeta_c + dot(g, poly[i] - c));
+    }
+    return best;
+}
+
+// One decoded texel.
+struct SpsmTexel {
+    // 0: a triangle; 1: depth only; 2: empty.
+    kind: u32,
+    // Vertices in absolute texel coordinates.
+    v0: vec2<f32>,
+    v1: vec2<f32>,
+    v2: vec2<f32>,
+    // The texel's centre.
+    centre: vec2<f32>,
+    // zeta at the centre on the plane.
+    depth: f32,
+    // zeta per texel.
+    gradient: vec2<f32>,
+    // Quantization bound of `gradient` (per texel).
+    gradient_error: vec2<f32>,
+}
+
+fn spsm_decode(words: vec4<u32>, texel: vec2<i32>, map_size: vec2<f32>) -> SpsmTexel {
+    var out: SpsmTexel;
+    out.centre = vec2<f32>(texel) + 0.5;
+    out.depth = spsm_decode_depth(words.w >> 16u);
+    if (words.w & 0xffffu) == 0u {
+        out.kind = select(2u, 1u, words.x == SPSM_DEPTH_ONLY);
+        return out;
+    }
+    out.kind = 0u;
+    out.v0 = out.centre + unpack2x16float(words.x);
+    out.v1 = out.centre + unpack2x16float(words.y);
+    out.v2 = out.centre + unpack2x16float(words.z);
+    let qx = ((words.w >> 8u) & 0xffu) - 1u;
+    let qy = (words.w & 0xffu) - 1u;
+    out.gradient = vec2<f32>(spsm_decode_slope(f32(qx)), spsm_decode_slope(f32(qy))) / map_size;
+    out.gradient_error = vec2<f32>(spsm_slope_error(qx), spsm_slope_error(qy)) / map_size;
+    return out;
+}
+
+// Whether `p` lies in the triangle (closed; never for a degenerate one).
+fn spsm_inside(t: SpsmTexel, p: vec2<f32>) -> bool {
+    let area = spsm_cross(t.v1 - t.v0, t.v2 - t.v0);
+    if abs(area) < 1e-6 {
+        return false;
+    }
+    let e0 = spsm_cross(t.v1 - t.v0, p - t.v0) * area;
+    let e1 = spsm_cross(t.v2 - t.v1, p - t.v1) * area;
+    let e2 = spsm_cross(t.v0 - t.v2, p - t.v2) * area;
+    return e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0;
+}
+
+// The stored plane's depth at `p` and its error bound from the packing.
+fn spsm_plane_at(t: SpsmTexel, p: vec2<f32>) -> vec2<f32> {
+    let d = p - t.centre;
+    return vec2<f32>(t.depth + dot(t.gradient, d), dot(t.gradient_error, abs(d)));
+}

@@ -1,0 +1,177 @@
+// SPSM pass: conservative rasterization of the scene into one light's
+// sub-pixel shadow map (spsm_common.wgsl, prepended, has the texel format).
+//
+// No CONSERVATIVE_RASTERIZATION on lavapipe or GL, so it is done here
+// (Hasselgren et al. 2005, as the paper does): the vertex stage pulls the
+// whole triangle from storage buffers (vertex_index = index slot), projects
+// it to texel space (after the perspective divide, so w is handled exactly)
+// and pushes each edge out by the half-texel box's support along its
+// normal, 0.5 (|n.x| + |n.y|) / |n| (half a texel diagonal at 45 degrees),
+// plus a 1/64-texel margin against the rasterizer's snapping. The three
+// offset lines meet in the expanded triangle. A sliver's expanded triangle
+// can be huge (vertex distance ~ offset / sin(angle / 2)); then a right
+// triangle around its half-texel-padded bounding box, whichever is smaller,
+// is drawn instead. The fragment stage discards texels whose box does not
+// meet the true triangle (exact separating-axis test), so the covered
+// texels are exactly those the triangle touches.
+//
+// Depth buffer: the paper's consistent minimum depth over the part of the
+// texel the triangle covers (spsm_min_depth), squeezed monotonically into
+// [0, 1] so that casters in front of the near plane still order. Colour:
+// the packed closest triangle.
+//
+// A triangle with a vertex at or behind the light's w = 0 plane cannot be
+// projected: it is drawn with its clip coordinates (the hardware clips it)
+// and stores a depth-only texel (standard shadow-map test there).
+
+// `ShadowPassRaw` (src/render/uniforms.rs), shared with shadow.wgsl; this
+// pass reads the matrix and the map size (clamp.yz).
+struct ShadowPass {
+    clip_from_world: mat4x4<f32>,
+    position: vec4<f32>,
+    depth: vec4<f32>,
+    clamp: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> shadow_pass: ShadowPass;
+// The scene's VertexRaw words (7 per vertex: position xyz, normal xyz, albedo).
+@group(0) @binding(1) var<storage, read> scene_vertices: array<u32>;
+@group(0) @binding(2) var<storage, read> scene_indices: array<u32>;
+
+struct SpsmVertex {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) t0: vec2<f32>,
+    @location(1) @interpolate(flat) t1: vec2<f32>,
+    @location(2) @interpolate(flat) t2: vec2<f32>,
+    @location(3) @interpolate(flat) zeta: vec3<f32>,
+    // 0: conservative; 1: clipped fallback.
+    @location(4) @interpolate(flat) mode: u32,
+}
+
+fn spsm_clip_of(index_slot: u32) -> vec4<f32> {
+    let v = scene_indices[index_slot] * 7u;
+    let p = vec3<f32>(bitcast<f32>(scene_vertices[v]), bitcast<f32>(scene_vertices[v + 1u]), bitcast<f32>(scene_vertices[v + 2u]));
+    return shadow_pass.clip_from_world * vec4<f32>(p, 1.0);
+}
+
+fn spsm_to_texel(clip: vec4<f32>) -> vec2<f32> {
+    let ndc = clip.xy / clip.w;
+    return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * shadow_pass.clamp.yz;
+}
+
+fn spsm_texel_to_clip(t: vec2<f32>) -> vec4<f32> {
+    let n = t / shadow_pass.clamp.yz;
+    return vec4<f32>(n.x * 2.0 - 1.0, 1.0 - n.y * 2.0, 0.5, 1.0);
+}
+
+// Intersection of the lines n1·x = c1 and n2·x = c2.
+fn spsm_meet(n1: vec2<f32>, c1: f32, n2: vec2<f32>, c2: f32) -> vec2<f32> {
+    let det = spsm_cross(n1, n2);
+    return vec2<f32>(c1 * n2.y - c2 * n1.y, n1.x * c2 - n2.x * c1) / det;
+}
+
+@vertex
+fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
+    let first = slot - slot % 3u;
+    let corner = slot % 3u;
+    var c = array<vec4<f32>, 3>(spsm_clip_of(first), spsm_clip_of(first + 1u), spsm_clip_of(first + 2u));
+    var out: SpsmVertex;
+    let w_scale = max(abs(c[0].w), max(abs(c[1].w), abs(c[2].w)));
+    if min(c[0].w, min(c[1].w, c[2].w)) <= 1e-6 * w_scale {
+        out.clip = c[corner];
+        out.mode = 1u;
+        return out;
+    }
+    var t = array<vec2<f32>, 3>(spsm_to_texel(c[0]), spsm_to_texel(c[1]), spsm_to_texel(c[2]));
+    out.t0 = t[0];
+    out.t1 = t[1];
+    out.t2 = t[2];
+    out.zeta = vec3<f32>(c[0].z / c[0].w, c[1].z / c[1].w, c[2].z / c[2].w);
+    out.mode = 0u;
+
+    // The padded bounding box and the right triangle (lo, lo + 2 (hi - lo) x, lo + 2 (hi - lo) y) around it.
+    let margin = 0.5 + 1.0 / 64.0;
+    let lo = min(t[0], min(t[1], t[2])) - margin;
+    let hi = max(t[0], max(t[1], t[2])) + margin;
+    let span = (hi - lo) * 2.01;
+    let box_area = 0.5 * span.x * span.y;
+    var box_corner = lo;
+    if corner == 1u {
+        box_corner = lo + vec2<f32>(span.x, 0.0);
+    } else if corner == 2u {
+        box_corner = lo + vec2<f32>(0.0, span.y);
+    }
+
+    // Edge k runs t[k] -> t[k + 1]; its outward normal and offset line.
+    let orient = sign(spsm_cross(t[1] - t[0], t[2] - t[0]));
+    var grown = array<vec2<f32>, 3>(t[0], t[1], t[2]);
+    var ok = orient != 0.0;
+    if ok {
+        var n: array<vec2<f32>, 3>;
+        var d: array<f32, 3>;
+        for (var k = 0u; k < 3u; k++) {
+            let a = t[k];
+            let b = t[(k + 1u) % 3u];
+            n[k] = orient * vec2<f32>(b.y - a.y, a.x - b.x);
+            d[k] = dot(n[k], a) + margin * (abs(n[k].x) + abs(n[k].y));
+        }
+        // Vertex k lies on edges k - 1 and k.
+        for (var k = 0u; k < 3u; k++) {
+            let j = (k + 2u) % 3u;
+            grown[k] = spsm_meet(n[j], d[j], n[k], d[k]);
+        }
+        let area = 0.5 * abs(spsm_cross(grown[1] - grown[0], grown[2] - grown[0]));
+        ok = area < box_area && all(abs(grown[0]) < vec2<f32>(1e7)) && all(abs(grown[1]) < vec2<f32>(1e7))
+            && all(abs(grown[2]) < vec2<f32>(1e7));
+    }
+    out.clip = spsm_texel_to_clip(select(box_corner, grown[corner], ok));
+    return out;
+}
+
+// Monotone squeeze of zeta (any real) into the depth buffer's [0, 1].
+fn spsm_depth_key(zeta: f32) -> f32 {
+    return 0.5 + 0.5 * zeta / (1.0 + abs(zeta));
+}
+
+struct SpsmOutput {
+    @location(0) texel: vec4<u32>,
+    @builtin(frag_depth) depth: f32,
+}
+
+@fragment
+fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
+    var out: SpsmOutput;
+    if in.mode == 1u {
+        // Clipped fallback: the hardware's depth z / w at the texel centre.
+        let zeta = in.clip.z;
+        out.texel = vec4<u32>(SPSM_DEPTH_ONLY, 0u, 0u, spsm_encode_depth(zeta) << 16u);
+        out.depth = spsm_depth_key(zeta);
+        return out;
+    }
+    let c = floor(in.clip.xy) + 0.5;
+    if !spsm_box_overlaps(in.t0, in.t1, in.t2, c) {
+        discard;
+    }
+    let g = spsm_gradient(in.t0, in.t1, in.t2, in.zeta);
+    let lowest = min(in.zeta.x, min(in.zeta.y, in.zeta.z));
+    let highest = max(in.zeta.x, max(in.zeta.y, in.zeta.z));
+    var zeta_c: f32;
+    var min_depth: f32;
+    if all(g == vec2<f32>(0.0)) && (highest > lowest) {
+        // Degenerate (edge-on) triangle: its nearest vertex, conservatively.
+        zeta_c = lowest;
+        min_depth = lowest;
+    } else {
+        zeta_c = in.zeta.x + dot(g, c - in.t0);
+        min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
+    }
+    let slopes = g * shadow_pass.clamp.yz;
+    out.texel = vec4<u32>(
+        spsm_pack_offset(in.t0 - c),
+        spsm_pack_offset(in.t1 - c),
+        spsm_pack_offset(in.t2 - c),
+        (spsm_encode_depth(zeta_c) << 16u) | ((spsm_encode_slope(slopes.x) + 1u) << 8u) | (spsm_encode_slope(slopes.y) + 1u),
+    );
+    out.depth = spsm_depth_key(min_depth);
+    return out;
+}

@@ -1,0 +1,223 @@
+//! The SPSM texel format on the CPU: the same encoding as
+//! `shaders/spsm_common.wgsl` (for tests, readback and error reports), the
+//! lookup's 3x3 pattern table, and a reference for conservative coverage.
+//!
+//! Texel words: `x, y, z` = the three vertices relative to the texel centre
+//! in texels, two IEEE half floats each (low half = x); `w` = 16-bit depth
+//! code (bits 31..16), then 1 + the x and y derivative codes (8 bits each).
+//! `w & 0xffff == 0`: no triangle (all zero: empty; `x == 1`: depth only).
+
+use glam::{DVec2, Vec2};
+
+const DEPTH_LO: f64 = -0.0625;
+const DEPTH_SPAN: f64 = 1.125;
+const MAX_ANGLE: f64 = 0.999_999;
+
+/// 16-bit code of a post-projective depth (unorm over `[-1/16, 17/16]`).
+#[must_use]
+pub fn encode_depth(z: f64) -> u32 {
+    (((z - DEPTH_LO) / DEPTH_SPAN).clamp(0.0, 1.0) * 65535.0).round() as u32
+}
+
+/// Inverse of [`encode_depth`].
+#[must_use]
+pub fn decode_depth(code: u32) -> f64 {
+    f64::from(code) / 65535.0 * DEPTH_SPAN + DEPTH_LO
+}
+
+/// The paper's eq. (3): `Q(d) = 127 (1 + a^n)`, `a = 2 atan(d) / π`
+/// (signed power), rounded to `0..=254`.
+#[must_use]
+pub fn encode_slope(d: f64, exponent: f64) -> u32 {
+    let a = (d.atan() / std::f64::consts::FRAC_PI_2).clamp(-MAX_ANGLE, MAX_ANGLE);
+    (127.0 * (1.0 + a.signum() * a.abs().powf(exponent))).round().clamp(0.0, 254.0) as u32
+}
+
+/// The paper's eq. (4) (also for fractional codes).
+#[must_use]
+pub fn decode_slope(q: f64, exponent: f64) -> f64 {
+    let s = (q / 127.0 - 1.0).clamp(-1.0, 1.0);
+    if s == 0.0 {
+        return 0.0;
+    }
+    let a = (s.signum() * s.abs().powf(1.0 / exponent)).clamp(-MAX_ANGLE, MAX_ANGLE);
+    (a * std::f64::consts::FRAC_PI_2).tan()
+}
+
+/// A texel's triangle as the lookup sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DecodedTexel {
+    /// Vertices in absolute texel coordinates.
+    pub vertices: [DVec2; 3],
+    /// Post-projective depth at the texel centre.
+    pub depth: f64,
+    /// Depth per texel along x and y.
+    pub gradient: DVec2,
+}
+
+/// Packs a triangle (absolute texel coordinates) stored at texel `texel` of
+/// a `map`-sized SPSM whose plane has depth `depth` at the texel centre and
+/// `gradient` per texel.
+#[must_use]
+pub fn pack(
+    vertices: [DVec2; 3],
+    texel: [u32; 2],
+    depth: f64,
+    gradient: DVec2,
+    map: [u32; 2],
+    exponent: f64,
+) -> [u32; 4] {
+    let centre = DVec2::new(f64::from(texel[0]), f64::from(texel[1])) + 0.5;
+    let half = |v: DVec2| {
+        let d = (v - centre).clamp(DVec2::splat(-60000.0), DVec2::splat(60000.0));
+        u32::from(half::f16::from_f64(d.x).to_bits()) | u32::from(half::f16::from_f64(d.y).to_bits()) << 16
+    };
+    let sx = encode_slope(gradient.x * f64::from(map[0]), exponent);
+    let sy = encode_slope(gradient.y * f64::from(map[1]), exponent);
+    [half(vertices[0]), half(vertices[1]), half(vertices[2]), encode_depth(depth) << 16 | (sx + 1) << 8 | (sy + 1)]
+}
+
+/// Decodes a texel at `texel`; `None` without a triangle.
+#[must_use]
+pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], exponent: f64) -> Option<DecodedTexel> {
+    if words[3] & 0xffff == 0 {
+        return None;
+    }
+    let centre = DVec2::new(f64::from(texel[0]), f64::from(texel[1])) + 0.5;
+    let vertex = |w: u32| {
+        let x = half::f16::from_bits(w as u16).to_f64();
+        let y = half::f16::from_bits((w >> 16) as u16).to_f64();
+        centre + DVec2::new(x, y)
+    };
+    let slope = |code: u32, size: u32| decode_slope(f64::from(code), exponent) / f64::from(size);
+    Some(DecodedTexel {
+        vertices: [vertex(words[0]), vertex(words[1]), vertex(words[2])],
+        depth: decode_depth(words[3] >> 16),
+        gradient: DVec2::new(slope((words[3] >> 8 & 0xff) - 1, map[0]), slope((words[3] & 0xff) - 1, map[1])),
+    })
+}
+
+/// Whether the texel texel box `[x, x + 1] x [y, y + 1]`, grown by `margin`
+/// on every side (negative: shrunk), meets the triangle (closed sets;
+/// separating axes x, y and the edge normals). The reference for the
+/// conservative rasterization tests.
+#[must_use]
+pub fn texel_touches(triangle: [DVec2; 3], texel: [i64; 2], margin: f64) -> bool {
+    let c = DVec2::new(texel[0] as f64, texel[1] as f64) + 0.5;
+    let h = 0.5 + margin;
+    let lo = triangle[0].min(triangle[1]).min(triangle[2]);
+    let hi = triangle[0].max(triangle[1]).max(triangle[2]);
+    if lo.x > c.x + h || lo.y > c.y + h || hi.x < c.x - h || hi.y < c.y - h {
+        return false;
+    }
+    let orient = (triangle[1] - triangle[0]).perp_dot(triangle[2] - triangle[0]).signum();
+    if orient == 0.0 {
+        let d = triangle[1] - triangle[0];
+        let n = DVec2::new(-d.y, d.x);
+        return n.dot(c - triangle[0]).abs() <= h * (n.x.abs() + n.y.abs());
+    }
+    (0..3).all(|k| {
+        let (a, b) = (triangle[k], triangle[(k + 1) % 3]);
+        let n = orient * DVec2::new(b.y - a.y, a.x - b.x);
+        n.dot(c - a) - h * (n.x.abs() + n.y.abs()) <= 0.0
+    })
+}
+
+/// The lookup's table: for each 9-bit 3x3 depth-test pattern (bit
+/// `3 (dy + 1) + dx + 1` set where the neighbour's texel blocks the
+/// receiver), the unit normal of the estimated silhouette pointing from the
+/// blocked side to the free side, or zero where no direction can be told
+/// (no bit, all bits, or balanced patterns).
+///
+/// As in the paper (section 4.2), blocked texels without a 4-connected
+/// blocked neighbour are left out of the estimate (conservative
+/// rasterization means an edge cannot pass between them unnoticed), unless
+/// that leaves none. The normal is then the direction from the blocked
+/// texels' centroid to the free ones'.
+#[must_use]
+pub fn silhouette_normals() -> Vec<Vec2> {
+    let offset = |i: usize| DVec2::new((i % 3) as f64 - 1.0, (i / 3) as f64 - 1.0);
+    (0u32..512)
+        .map(|pattern| {
+            let blocked: Vec<usize> = (0..9).filter(|&i| pattern >> i & 1 == 1).collect();
+            if blocked.is_empty() || blocked.len() == 9 {
+                return Vec2::ZERO;
+            }
+            let connected: Vec<usize> = blocked
+                .iter()
+                .copied()
+                .filter(|&i| blocked.iter().any(|&j| (offset(i) - offset(j)).abs().element_sum() == 1.0))
+                .collect();
+            let kept = if connected.is_empty() { blocked } else { connected };
+            let free: Vec<usize> = (0..9).filter(|&i| pattern >> i & 1 == 0).collect();
+            let centroid = |set: &[usize]| set.iter().map(|&i| offset(i)).sum::<DVec2>() / set.len() as f64;
+            let n = centroid(&free) - centroid(&kept);
+            if n.length() < 1e-9 {
+                Vec2::ZERO
+            } else {
+                n.normalize().as_vec2()
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_codes_round_trip_within_half_a_step() {
+        for k in 0..=1000 {
+            let z = -0.05 + 1.1 * f64::from(k) / 1000.0;
+            let err = (decode_depth(encode_depth(z)) - z).abs();
+            assert!(err <= 0.5 * DEPTH_SPAN / 65535.0 + 1e-12, "z {z}: {err}");
+        }
+    }
+
+    #[test]
+    fn slope_codes_are_odd_monotone_and_exact_at_zero() {
+        let mut last = 0;
+        for k in -400..=400 {
+            let d = (f64::from(k) / 100.0).powi(3);
+            let q = encode_slope(d, 5.0);
+            assert!(q >= last, "monotone");
+            last = q;
+            assert_eq!(encode_slope(-d, 5.0), 254 - q, "odd");
+        }
+        assert_eq!(decode_slope(f64::from(encode_slope(0.0, 5.0)), 5.0), 0.0);
+    }
+
+    #[test]
+    fn pack_round_trips() {
+        let tri = [DVec2::new(10.25, 3.5), DVec2::new(12.0, 9.75), DVec2::new(7.125, 6.0)];
+        let words = pack(tri, [10, 5], 0.4321, DVec2::new(0.01, -0.003), [64, 64], 5.0);
+        let back = unpack(words, [10, 5], [64, 64], 5.0).unwrap();
+        for (a, b) in tri.iter().zip(back.vertices) {
+            assert!((*a - b).length() < 1e-3, "{a} {b}");
+        }
+        assert!((back.depth - 0.4321).abs() < 1e-5);
+        assert!(unpack([0, 0, 0, 0], [0, 0], [4, 4], 5.0).is_none());
+        assert!(unpack([1, 0, 0, 0x1234_0000], [0, 0], [4, 4], 5.0).is_none());
+    }
+
+    #[test]
+    fn table_points_from_blocked_to_free() {
+        let normals = silhouette_normals();
+        // Left column blocked: free side to the right.
+        let left = 1 | 1 << 3 | 1 << 6;
+        assert!(normals[left].x > 0.99);
+        // Top row plus centre blocked: free side down.
+        let top = 1 | 2 | 4 | 16;
+        assert!(normals[top].y > 0.9);
+        assert_eq!(normals[0], Vec2::ZERO);
+        assert_eq!(normals[511], Vec2::ZERO);
+    }
+
+    #[test]
+    fn touches_is_exact_on_a_sliver() {
+        let tri = [DVec2::new(0.5, 0.5), DVec2::new(9.5, 0.6), DVec2::new(9.5, 0.61)];
+        assert!(texel_touches(tri, [5, 0], 0.0));
+        assert!(!texel_touches(tri, [5, 1], 0.0));
+        assert!(!texel_touches(tri, [5, 1], -0.01));
+    }
+}

@@ -1,0 +1,241 @@
+//! Sub-pixel shadow maps: the shader's conservative rasterization against a
+//! CPU reference, the texel packing, SPSM bits against ray casting, and thin
+//! casters a standard map loses.
+
+#![cfg(feature = "render")]
+
+mod render_common;
+
+use glam::{DVec2, DVec3, UVec2, Vec3};
+use lixel::mesh::{Mesh, RayCaster, Role, Scene, SceneObject};
+use lixel::render::spsm::packing;
+use lixel::render::{Frame, Renderer, RendererOptions, ShadowLookup, SpsmOptions};
+
+const SPSM: ShadowLookup = ShadowLookup::Spsm(SpsmOptions::PAPER);
+use lixel::{Camera, Light, LightMatrix, Parameterization};
+use render_common::*;
+
+fn object(name: &str, mesh: Mesh, role: Role) -> SceneObject {
+    SceneObject { name: name.into(), mesh, role, albedo: Vec3::splat(0.8) }
+}
+
+/// Flat triangles (normals up), one object.
+fn triangles(tris: &[[Vec3; 3]]) -> Mesh {
+    let mut mesh = Mesh::default();
+    for t in tris {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend_from_slice(t);
+        mesh.normals.extend([Vec3::Y; 3]);
+        mesh.indices.extend([base, base + 1, base + 2]);
+    }
+    mesh
+}
+
+/// Texel coordinates (x right, y down) of a world point.
+fn texel_of(m: &LightMatrix, p: Vec3) -> DVec2 {
+    let t = m.texel_from_world() * p.as_dvec3().extend(1.0);
+    DVec2::new(t.x / t.w, t.y / t.w)
+}
+
+/// Every texel a thin or sliver triangle touches gets a fragment, and no
+/// texel it does not touch (up to 1e-3 texel), for a directional and a
+/// point light; the stored triangles and depths decode to the CPU's within
+/// the packing's precision.
+#[test]
+fn conservative_coverage_matches_the_cpu_reference() {
+    let Some((device, queue)) = gpu() else { return };
+    // Separate thin shapes on a 10 x 10 area, well apart from each other.
+    let y = 0.5;
+    let shapes = [
+        // Needle along x, 0.002 wide.
+        [Vec3::new(-4.5, y, -4.0), Vec3::new(4.5, y, -4.0), Vec3::new(4.5, y, -4.002)],
+        // Diagonal sliver.
+        [Vec3::new(-4.0, y, -3.0), Vec3::new(-1.0, y, 0.0), Vec3::new(-0.99, y, -0.0)],
+        // Tiny triangle inside one texel.
+        [Vec3::new(2.01, y, 1.01), Vec3::new(2.02, y, 1.01), Vec3::new(2.01, y, 1.02)],
+        // Long thin, slightly tilted in depth.
+        [Vec3::new(0.5, 0.2, 4.0), Vec3::new(4.2, 0.9, 0.5), Vec3::new(4.21, 0.9, 0.52)],
+        // An ordinary triangle.
+        [Vec3::new(-4.0, y, 2.0), Vec3::new(-2.0, y, 4.0), Vec3::new(-1.0, y, 1.5)],
+    ];
+    let floor = triangles(&[[Vec3::new(-5.0, 0.0, 5.0), Vec3::new(5.0, 0.0, 5.0), Vec3::new(5.0, 0.0, -5.0)]]);
+    let scene = Scene {
+        objects: vec![
+            object("shapes", triangles(&shapes), Role::CasterAndReceiver),
+            object("floor", floor, Role::Receiver),
+        ],
+    };
+    let camera = Camera::look_at(DVec3::new(0.0, 12.0, 12.0), DVec3::ZERO, DVec3::Y, 1.0, UVec2::splat(64), 0.5, 100.0)
+        .expect("camera");
+    for light in [Light::directional(DVec3::new(0.2, -1.0, 0.1)), Light::point(DVec3::new(1.0, 15.0, -2.0))] {
+        let m = matrices(&scene, &camera, &[light], 48, &Parameterization::Normal).remove(0);
+        let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+        let lights = [m];
+        renderer.render(&Frame { lookup: SPSM, ..Frame::new(&camera, &lights) }).unwrap();
+        let texels = renderer.read_map_words(0).unwrap().expect("spsm words");
+        let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
+        let projected: Vec<[DVec2; 3]> =
+            shapes.iter().map(|t| [texel_of(&m, t[0]), texel_of(&m, t[1]), texel_of(&m, t[2])]).collect();
+        let (mut checked, mut max_vertex_error, mut max_depth_error) = (0, 0.0f64, 0.0f64);
+        for y in 0..h {
+            for x in 0..w {
+                let words = texels[(y * w + x) as usize];
+                // The floor lies under everything but is clipped to the shapes' test below.
+                let surely = projected.iter().any(|t| packing::texel_touches(*t, [x, y], -1e-3));
+                let maybe = projected.iter().any(|t| packing::texel_touches(*t, [x, y], 1e-3));
+                let decoded = packing::unpack(words, [x as u32, y as u32], [w as u32, h as u32], 5.0);
+                let stored_shape = decoded.and_then(|d| {
+                    projected.iter().position(|t| t.iter().zip(d.vertices).all(|(a, b)| (*a - b).length() < 0.05))
+                });
+                if surely {
+                    checked += 1;
+                    let k = stored_shape.unwrap_or_else(|| panic!("texel ({x}, {y}) touched but holds {decoded:?}"));
+                    let d = decoded.unwrap();
+                    for (a, b) in projected[k].iter().zip(d.vertices) {
+                        max_vertex_error = max_vertex_error.max((*a - b).length());
+                    }
+                    // Depth at the texel centre on the shape's plane, from the CPU.
+                    let plane = plane_depth(&m, &shapes[k], DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                    max_depth_error = max_depth_error.max((plane - d.depth).abs());
+                } else if !maybe {
+                    assert!(stored_shape.is_none(), "texel ({x}, {y}) not touched but holds shape {stored_shape:?}");
+                }
+            }
+        }
+        eprintln!("{light:?}: {checked} touched texels; vertex error {max_vertex_error:.2e} texel, depth error {max_depth_error:.2e}");
+        assert!(checked > 60, "the shapes touch texels: {checked}");
+        assert!(max_vertex_error < 0.02, "f16 vertex offsets: {max_vertex_error}");
+        assert!(max_depth_error < 2e-5, "16-bit depth at the centre: {max_depth_error}");
+    }
+}
+
+/// Post-projective depth at texel position `t` on the plane of `tri`.
+fn plane_depth(m: &LightMatrix, tri: &[Vec3; 3], t: DVec2) -> f64 {
+    let texel_from_world = m.texel_from_world();
+    let p: Vec<DVec3> = tri
+        .iter()
+        .map(|v| {
+            let c = texel_from_world * v.as_dvec3().extend(1.0);
+            let ndc_z = (m.clip_from_world * v.as_dvec3().extend(1.0)).z / c.w;
+            DVec3::new(c.x / c.w, c.y / c.w, ndc_z)
+        })
+        .collect();
+    let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+    let n = e1.cross(e2);
+    p[0].z - (n.x * (t.x - p[0].x) + n.y * (t.y - p[0].y)) / n.z
+}
+
+/// Packing round trips for every code, and the derivative code's worst
+/// relative error over slopes that matter (reported).
+#[test]
+fn slope_codes_round_trip() {
+    for exponent in [1.0, 3.0, 5.0] {
+        for q in 0..=254u32 {
+            let d = packing::decode_slope(f64::from(q), exponent);
+            assert_eq!(packing::encode_slope(d, exponent), q, "code {q}, exponent {exponent}");
+        }
+        let worst = |lo: f64, hi: f64| {
+            (0..=1000)
+                .map(|k| lo * (hi / lo).powf(f64::from(k) / 1000.0))
+                .map(|d| (packing::decode_slope(f64::from(packing::encode_slope(d, exponent)), exponent) - d).abs() / d)
+                .fold(0.0, f64::max)
+        };
+        eprintln!(
+            "exponent {exponent}: worst relative slope error over [1, 10]: {:.3}, over [10, 100]: {:.3}",
+            worst(1.0, 10.0),
+            worst(10.0, 100.0)
+        );
+    }
+}
+
+/// SPSM shadow bits agree with the ray cast away from boundaries (99%), and
+/// misclassify fewer pixels overall than the standard map, on the tiny
+/// scene with a coarse 256² map.
+#[test]
+fn spsm_bits_agree_with_ray_cast() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(160);
+    let lights = test_lights();
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 160, 160);
+    let matrices = matrices(&scene, &camera, &lights, 256, &Parameterization::Focused);
+    let mut counts = Vec::new();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    for lookup in [ShadowLookup::DepthCompare, SPSM] {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &matrices) }).unwrap();
+        let gpu = renderer.read_masks().unwrap();
+        let mut total = 0;
+        for light in 0..lights.len() as u32 {
+            let agreement = truth.agreement_away_from_boundaries(&gpu, light, 1);
+            eprintln!("{} light {light}: {agreement:?}", lookup.name());
+            assert!(agreement.fraction() >= 0.99, "{} light {light}: {agreement:?}", lookup.name());
+            total += gpu.misclassified(&truth, light).unwrap();
+        }
+        counts.push(total);
+    }
+    eprintln!("misclassified: standard {}, spsm {}", counts[0], counts[1]);
+    // Measured (lavapipe): standard 439, SPSM 299.
+    assert!(counts[1] < counts[0], "SPSM lowers the error: {counts:?}");
+}
+
+/// A thin pole and a wire fence whose shadows a standard 256² map loses
+/// almost entirely (they are far thinner than a texel) but SPSM keeps.
+///
+/// KNOWN FAILURE (issue 16, see /work/notes/issue-16.md): measured on
+/// lavapipe, of 279 ray-cast shadow pixels the standard map finds 183 (the
+/// premise does not hold for this scene: the wires are 0.2 texel thick) and
+/// SPSM only 82. Each texel keeps one triangle of a wire's 12, so a floor
+/// point under the wire usually lies outside the stored triangle's 2D
+/// projection and the silhouette recovery, fed only occluders' vertices,
+/// calls it lit.
+#[test]
+#[ignore = "known failure: SPSM keeps 82 of 279 thin-wire shadow pixels (standard 183)"]
+fn thin_casters_keep_their_shadows() {
+    let Some((device, queue)) = gpu() else { return };
+    let mut casters = Mesh::default();
+    // A pole 0.03 wide and 4 high, and a fence of wires 0.02 thick.
+    let pole = lixel::mesh::primitives::cuboid(Vec3::new(0.015, 2.0, 0.015), 12);
+    casters.append(&pole.transformed(&glam::Affine3A::from_translation(Vec3::new(-3.0, 2.0, 0.0))));
+    for k in 0..4 {
+        let wire = lixel::mesh::primitives::cuboid(Vec3::new(4.0, 0.01, 0.01), 12);
+        casters.append(&wire.transformed(&glam::Affine3A::from_translation(Vec3::new(2.0, 0.8 + 0.6 * k as f32, 0.0))));
+    }
+    let floor = lixel::mesh::primitives::floor(24.0, 2);
+    let scene = Scene {
+        objects: vec![object("casters", casters, Role::CasterAndReceiver), object("floor", floor, Role::Receiver)],
+    };
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 9.0, 12.0),
+        DVec3::new(0.0, 0.0, -2.0),
+        DVec3::Y,
+        1.0,
+        UVec2::splat(200),
+        0.5,
+        100.0,
+    )
+    .expect("camera");
+    let lights = [Light::directional(DVec3::new(0.3, -1.0, -0.8))];
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 200, 200);
+    let floor_shadow = |masks: &lixel::mesh::ShadowMasks| {
+        (0..truth.depth.len())
+            .filter(|&i| truth.visible(i) && truth.shadow[i] & 1 == 1 && masks.shadow[i] & 1 == 1)
+            .count()
+    };
+    let expected = floor_shadow(&truth);
+    assert!(expected > 200, "the ray cast sees the thin shadows: {expected}");
+    let m = matrices(&scene, &camera, &lights, 256, &Parameterization::Normal);
+    let mut found = Vec::new();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    for lookup in [ShadowLookup::DepthCompare, SPSM] {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &m) }).unwrap();
+        let masks = renderer.read_masks().unwrap();
+        let false_shadow = (0..truth.depth.len())
+            .filter(|&i| truth.visible(i) && truth.shadow[i] & 1 == 0 && masks.shadow[i] & 1 == 1)
+            .count();
+        found.push((floor_shadow(&masks), false_shadow));
+    }
+    eprintln!("true shadow pixels {expected}; (found, false) standard {:?}, spsm {:?}", found[0], found[1]);
+    assert!(found[0].0 * 5 < expected, "the standard map loses most of them: {found:?}");
+    assert!(found[1].0 * 10 > expected * 8, "SPSM keeps at least 80%: {found:?}");
+    assert!(found[1].1 * 4 < expected, "without much false shadow: {found:?}");
+}
