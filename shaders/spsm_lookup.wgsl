@@ -1,21 +1,25 @@
 // SPSM lookup (Lecocq et al. 2014, section 4): `in_shadow` of the lookup
 // mode ShadowLookup::Spsm, after common.wgsl. spsm_common.wgsl is
-// prepended, and SPSM_TANGENTS, the 3x3 pattern -> silhouette normal table.
+// prepended.
 //
 // For a receiver p (texel position, depth zeta = z / w of the light matrix):
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
 //    touches the texel); p inside the stored triangle -> its plane decides;
 // 2. the 3x3 neighbourhood: any stored triangle containing p whose plane is
-//    in front of p -> shadowed; else one containing p at p's depth -> lit
-//    (a receiver's mesh edge crossing the texel);
+//    in front of p -> shadowed; else, when the own triangle's plane is not
+//    in front of p (by more than its change over a texel), p on that plane
+//    or on a neighbour's stored triangle -> lit (a receiver's mesh edge
+//    crossing the texel);
 // 3. uncertain: silhouette recovery. Each neighbour's consistent minimum
 //    depth tested against zeta gives a 9-bit pattern; all blocked ->
-//    shadowed, none -> lit; else the table gives the silhouette's normal n
-//    (towards the lit side) and tangent. The occluders' boundary vertices
-//    (vertex normal towards the lit side) within two texels along the
-//    tangent are projected on it, and the piecewise-linear phi through the
-//    nearest one on each side decides: shadowed when phi(t(p)) reaches
-//    past p towards the lit side.
+//    shadowed, none -> lit; else the pattern gives the silhouette's normal n
+//    (towards the lit side) and tangent, or two (a thin band: both normals
+//    of its axis) or four (a blob: the axes) estimates. Per estimate the
+//    occluders' boundary vertices (vertex normal towards the lit side)
+//    within two texels along the tangent are projected on it, and the
+//    piecewise-linear phi through the nearest one on each side decides:
+//    shadowed when phi(t(p)) reaches past p towards the lit side; p is
+//    shadowed when every estimate says so (the paper's intersection).
 // Depth tests use the stored plane with a constant bias SPSM_BIAS (1e-5 of
 // the [0, 1] depth range by default) plus, when SPSM_TOLERANCE is 1, the
 // packing's own error bound on the extrapolated plane.
@@ -54,18 +58,84 @@ fn spsm_edge_normal(a: vec2<f32>, b: vec2<f32>, orient: f32) -> vec2<f32> {
     return n / max(length(n), 1e-20);
 }
 
-fn spsm_recover(texels_in: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool {
-    var texels = texels_in;
-    if pattern == 0u {
-        return false;
+// Offset of slot i of the 3x3 neighbourhood.
+fn spsm_slot(i: u32) -> vec2<f32> {
+    return vec2<f32>(f32(i % 3u) - 1.0, f32(i / 3u) - 1.0);
+}
+
+// The silhouette estimate of a 3x3 depth-test pattern (bit i set where
+// slot i blocks the receiver; neither none nor all): xy the unit normal of
+// the estimated silhouette, z the kind: 0 one-sided (normal from the
+// blocked to the free side), 1 two-sided (a thin blocked band along the
+// tangent: free on both sides, test both normals), 2 no direction (a
+// blocked blob: test the four axis directions). As in the paper, blocked
+// texels without a 4-connected blocked neighbour are left out of the
+// estimate (an edge cannot pass between them unnoticed) unless that
+// leaves none. Mirrored on the CPU by `packing::silhouette_estimate`.
+fn spsm_silhouette(pattern: u32) -> vec3<f32> {
+    var connected = 0u;
+    for (var i = 0u; i < 9u; i++) {
+        if ((pattern >> i) & 1u) == 0u {
+            continue;
+        }
+        let x = i % 3u;
+        var around = 0u;
+        if x > 0u {
+            around |= 1u << (i - 1u);
+        }
+        if x < 2u {
+            around |= 1u << (i + 1u);
+        }
+        if i >= 3u {
+            around |= 1u << (i - 3u);
+        }
+        if i < 6u {
+            around |= 1u << (i + 3u);
+        }
+        if (pattern & around) != 0u {
+            connected |= 1u << i;
+        }
     }
-    if pattern == 0x1ffu {
-        return true;
+    let kept = select(pattern, connected, connected != 0u);
+    var sum_kept = vec2<f32>(0.0);
+    var sum_free = vec2<f32>(0.0);
+    var n_kept = 0.0;
+    var n_free = 0.0;
+    var moments = vec3<f32>(0.0);
+    for (var i = 0u; i < 9u; i++) {
+        let o = spsm_slot(i);
+        if ((kept >> i) & 1u) != 0u {
+            sum_kept += o;
+            n_kept += 1.0;
+            moments += vec3<f32>(o.x * o.x, o.y * o.y, o.x * o.y);
+        }
+        if ((pattern >> i) & 1u) == 0u {
+            sum_free += o;
+            n_free += 1.0;
+        }
     }
-    let n = SPSM_TANGENTS[pattern];
-    if all(n == vec2<f32>(0.0)) {
-        return (pattern & (1u << 4u)) != 0u;
+    let c = sum_kept / n_kept;
+    let d = sum_free / n_free - c;
+    if length(d) > 1e-3 {
+        return vec3<f32>(normalize(d), 0.0);
     }
+    // Balanced: the principal axis of the kept texels is the tangent.
+    let sxx = moments.x / n_kept - c.x * c.x;
+    let syy = moments.y / n_kept - c.y * c.y;
+    let sxy = moments.z / n_kept - c.x * c.y;
+    if abs(sxx - syy) + abs(sxy) < 1e-3 {
+        return vec3<f32>(0.0, 0.0, 2.0);
+    }
+    let theta = 0.5 * atan2(2.0 * sxy, sxx - syy);
+    return vec3<f32>(-sin(theta), cos(theta), 1.0);
+}
+
+// One silhouette side: the occluders' boundary vertices facing `n` (the
+// free side) within two texels along the tangent are projected on it, and
+// the piecewise-linear phi through the nearest one on each side of p
+// decides: 1 shadowed when phi(t(p)) reaches past p towards `n`, 0 lit,
+// 2 when no boundary vertex was found.
+fn spsm_side(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>, n: vec2<f32>) -> u32 {
     let tangent = vec2<f32>(-n.y, n.x);
     // Nearest boundary vertex on each side of p along the tangent: (t, d).
     var left = vec2<f32>(-1e30, 0.0);
@@ -91,7 +161,7 @@ fn spsm_recover(texels_in: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> b
             if abs(tv) > 2.0 {
                 continue;
             }
-            // Nearest in t; near-ties go to the vertex further towards the lit side.
+            // Nearest in t; near-ties go to the vertex further towards the free side.
             if tv <= 0.0 && (tv > left.x + 0.01 || (tv > left.x - 0.01 && dv > left.y)) {
                 left = vec2<f32>(tv, dv);
                 found.x = true;
@@ -111,10 +181,39 @@ fn spsm_recover(texels_in: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> b
     } else if found.y {
         phi = right.y;
     } else {
-        return (pattern & (1u << 4u)) != 0u;
+        return 2u;
     }
-    // p sits at d = 0: shadowed when the boundary lies on its lit side.
-    return phi >= 0.0;
+    // p sits at d = 0: shadowed when the boundary lies on its free side.
+    return select(0u, 1u, phi >= 0.0);
+}
+
+fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool {
+    if pattern == 0u {
+        return false;
+    }
+    if pattern == 0x1ffu {
+        return true;
+    }
+    let centre = (pattern & (1u << 4u)) != 0u;
+    let estimate = spsm_silhouette(pattern);
+    var normals = array<vec2<f32>, 4>(estimate.xy, -estimate.xy, vec2<f32>(0.0), vec2<f32>(0.0));
+    var count = 1u;
+    if estimate.z == 1.0 {
+        count = 2u;
+    } else if estimate.z == 2.0 {
+        normals = array<vec2<f32>, 4>(vec2<f32>(1.0, 0.0), vec2<f32>(-1.0, 0.0), vec2<f32>(0.0, 1.0), vec2<f32>(0.0, -1.0));
+        count = 4u;
+    }
+    // Several tangent estimates: shadowed only where every one says so (the
+    // paper's intersection); a side without boundary vertices defers to the
+    // own texel's consistent depth test.
+    for (var j = 0u; j < count; j++) {
+        let side = spsm_side(texels, pattern, p, normals[j]);
+        if side == 0u || (side == 2u && !centre) {
+            return false;
+        }
+    }
+    return true;
 }
 
 fn in_shadow(light: Light, world: vec3<f32>) -> bool {
@@ -137,15 +236,22 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     if own.kind == 1u {
         return own.depth < zeta - SPSM_BIAS;
     }
+    let own_plane = spsm_plane_at(own, p);
+    let own_slack = SPSM_BIAS + SPSM_TOLERANCE * own_plane.y;
     if spsm_inside(own, p) {
-        let plane = spsm_plane_at(own, p);
-        return plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y;
+        return own_plane.x < zeta - own_slack;
     }
+    // The own texel's closest triangle, extended to p, is not in front of p
+    // by more than its own depth change across one texel (a curved
+    // receiver's neighbouring facet): no occluder found so far. p then
+    // counts as lit when it lies on that plane (the paper's lit
+    // classification) or on a neighbour's stored triangle (a receiver's mesh
+    // edge crosses the texel). A thin caster stored over a receiver is far
+    // more in front and goes on to the silhouette recovery.
+    let own_clear = own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
     var texels: array<SpsmTexel, 9>;
     var pattern = 0u;
-    // p lies on a neighbour's stored triangle (a receiver mesh edge crosses
-    // the own texel): the surface the map holds there is p's own.
-    var on_surface = false;
+    var on_surface = own_clear && own_plane.x <= zeta + own_slack;
     for (var i = 0u; i < 9u; i++) {
         var t = own;
         if i != 4u {
@@ -155,7 +261,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {
                     return true;
                 }
-                on_surface = true;
+                on_surface = on_surface || own_clear;
             }
         }
         if spsm_texel_blocks(t, zeta) {

@@ -89,16 +89,6 @@ fn constants(options: &SpsmOptions) -> String {
     )
 }
 
-/// The 3x3 pattern table of the lookup as a WGSL constant.
-fn tangent_table() -> String {
-    let mut s = String::from("const SPSM_TANGENTS = array<vec2<f32>, 512>(\n");
-    for n in packing::silhouette_normals() {
-        s.push_str(&format!("    vec2<f32>({:?}, {:?}),\n", n.x, n.y));
-    }
-    s.push_str(");\n");
-    s
-}
-
 /// The mode's shadow-pass WGSL (after `light_depth.wgsl`).
 pub(crate) fn pass_source(options: &SpsmOptions) -> String {
     constants(options)
@@ -110,6 +100,5 @@ pub(crate) fn pass_source(options: &SpsmOptions) -> String {
 pub(crate) fn lookup_source(options: &SpsmOptions) -> String {
     constants(options)
         + include_str!("../../../shaders/spsm_common.wgsl")
-        + &tangent_table()
         + include_str!("../../../shaders/spsm_lookup.wgsl")
 }

@@ -1,6 +1,7 @@
 //! The SPSM texel format on the CPU: the same encoding as
 //! `shaders/spsm_common.wgsl` (for tests, readback and error reports), the
-//! lookup's 3x3 pattern table, and a reference for conservative coverage.
+//! lookup's 3x3 silhouette estimate, and a reference for conservative
+//! coverage.
 //!
 //! Texel words: `x, y, z` = the three vertices relative to the texel centre
 //! in texels, two IEEE half floats each (low half = x); `w` = 16-bit depth
@@ -123,42 +124,59 @@ pub fn texel_touches(triangle: [DVec2; 3], texel: [i64; 2], margin: f64) -> bool
     })
 }
 
-/// The lookup's table: for each 9-bit 3x3 depth-test pattern (bit
-/// `3 (dy + 1) + dx + 1` set where the neighbour's texel blocks the
-/// receiver), the unit normal of the estimated silhouette pointing from the
-/// blocked side to the free side, or zero where no direction can be told
-/// (no bit, all bits, or balanced patterns).
+/// What the lookup's silhouette recovery makes of a 3x3 depth-test pattern
+/// (bit `3 (dy + 1) + dx + 1` set where that neighbour's texel blocks the
+/// receiver); the CPU mirror of `spsm_silhouette` in
+/// `shaders/spsm_lookup.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Silhouette {
+    /// No bit or every bit: nothing to recover.
+    None,
+    /// One edge: its unit normal from the blocked to the free side.
+    OneSided(Vec2),
+    /// A thin blocked band, free on both sides: the unit normal of its axis
+    /// (both signs are tested).
+    TwoSided(Vec2),
+    /// A blocked blob without a direction: the four axis directions are
+    /// tested.
+    Blob,
+}
+
+/// The silhouette estimate of `pattern` (see [`Silhouette`]).
 ///
 /// As in the paper (section 4.2), blocked texels without a 4-connected
 /// blocked neighbour are left out of the estimate (conservative
 /// rasterization means an edge cannot pass between them unnoticed), unless
-/// that leaves none. The normal is then the direction from the blocked
-/// texels' centroid to the free ones'.
+/// that leaves none. The normal runs from the kept blocked texels' centroid
+/// to the free ones'; where the two coincide the kept texels' principal
+/// axis is the tangent (two-sided), or there is none (a blob).
 #[must_use]
-pub fn silhouette_normals() -> Vec<Vec2> {
+pub fn silhouette_estimate(pattern: u32) -> Silhouette {
     let offset = |i: usize| DVec2::new((i % 3) as f64 - 1.0, (i / 3) as f64 - 1.0);
-    (0u32..512)
-        .map(|pattern| {
-            let blocked: Vec<usize> = (0..9).filter(|&i| pattern >> i & 1 == 1).collect();
-            if blocked.is_empty() || blocked.len() == 9 {
-                return Vec2::ZERO;
-            }
-            let connected: Vec<usize> = blocked
-                .iter()
-                .copied()
-                .filter(|&i| blocked.iter().any(|&j| (offset(i) - offset(j)).abs().element_sum() == 1.0))
-                .collect();
-            let kept = if connected.is_empty() { blocked } else { connected };
-            let free: Vec<usize> = (0..9).filter(|&i| pattern >> i & 1 == 0).collect();
-            let centroid = |set: &[usize]| set.iter().map(|&i| offset(i)).sum::<DVec2>() / set.len() as f64;
-            let n = centroid(&free) - centroid(&kept);
-            if n.length() < 1e-9 {
-                Vec2::ZERO
-            } else {
-                n.normalize().as_vec2()
-            }
-        })
-        .collect()
+    let blocked: Vec<usize> = (0..9).filter(|&i| pattern >> i & 1 == 1).collect();
+    if blocked.is_empty() || blocked.len() == 9 {
+        return Silhouette::None;
+    }
+    let connected: Vec<usize> = blocked
+        .iter()
+        .copied()
+        .filter(|&i| blocked.iter().any(|&j| (offset(i) - offset(j)).abs().element_sum() == 1.0))
+        .collect();
+    let kept = if connected.is_empty() { blocked } else { connected };
+    let free: Vec<usize> = (0..9).filter(|&i| pattern >> i & 1 == 0).collect();
+    let centroid = |set: &[usize]| set.iter().map(|&i| offset(i)).sum::<DVec2>() / set.len() as f64;
+    let c = centroid(&kept);
+    let n = centroid(&free) - c;
+    if n.length() > 1e-3 {
+        return Silhouette::OneSided(n.normalize().as_vec2());
+    }
+    let moment = |f: &dyn Fn(DVec2) -> f64| kept.iter().map(|&i| f(offset(i) - c)).sum::<f64>() / kept.len() as f64;
+    let (sxx, syy, sxy) = (moment(&|o| o.x * o.x), moment(&|o| o.y * o.y), moment(&|o| o.x * o.y));
+    if (sxx - syy).abs() + sxy.abs() < 1e-3 {
+        return Silhouette::Blob;
+    }
+    let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    Silhouette::TwoSided(DVec2::new(-theta.sin(), theta.cos()).as_vec2())
 }
 
 #[cfg(test)]
@@ -201,16 +219,30 @@ mod tests {
     }
 
     #[test]
-    fn table_points_from_blocked_to_free() {
-        let normals = silhouette_normals();
+    fn estimates_point_from_blocked_to_free() {
+        let one_sided = |pattern: u32| match silhouette_estimate(pattern) {
+            Silhouette::OneSided(n) => n,
+            other => panic!("{pattern:#b}: {other:?}"),
+        };
         // Left column blocked: free side to the right.
-        let left = 1 | 1 << 3 | 1 << 6;
-        assert!(normals[left].x > 0.99);
+        assert!(one_sided(1 | 1 << 3 | 1 << 6).x > 0.99);
         // Top row plus centre blocked: free side down.
-        let top = 1 | 2 | 4 | 16;
-        assert!(normals[top].y > 0.9);
-        assert_eq!(normals[0], Vec2::ZERO);
-        assert_eq!(normals[511], Vec2::ZERO);
+        assert!(one_sided(1 | 2 | 4 | 16).y > 0.9);
+        assert_eq!(silhouette_estimate(0), Silhouette::None);
+        assert_eq!(silhouette_estimate(511), Silhouette::None);
+        // A thin band through the middle row: free above and below.
+        match silhouette_estimate(1 << 3 | 1 << 4 | 1 << 5) {
+            Silhouette::TwoSided(n) => assert!(n.y.abs() > 0.99, "{n}"),
+            other => panic!("{other:?}"),
+        }
+        // A diagonal band.
+        match silhouette_estimate(1 | 1 << 4 | 1 << 8) {
+            Silhouette::TwoSided(n) => assert!((n.x + n.y).abs() < 1e-6 && n.x.abs() > 0.7, "{n}"),
+            other => panic!("{other:?}"),
+        }
+        // The centre alone, or a plus: no direction.
+        assert_eq!(silhouette_estimate(1 << 4), Silhouette::Blob);
+        assert_eq!(silhouette_estimate(1 << 1 | 1 << 3 | 1 << 4 | 1 << 5 | 1 << 7), Silhouette::Blob);
     }
 
     #[test]
