@@ -196,6 +196,10 @@ fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool
     }
     let centre = (pattern & (1u << 4u)) != 0u;
     let estimate = spsm_silhouette(pattern);
+    if !SPSM_THIN && estimate.z != 0.0 {
+        // One tangent only: no direction, the own texel's depth test.
+        return centre;
+    }
     var normals = array<vec2<f32>, 4>(estimate.xy, -estimate.xy, vec2<f32>(0.0), vec2<f32>(0.0));
     var count = 1u;
     if estimate.z == 1.0 {
@@ -248,10 +252,12 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     // classification) or on a neighbour's stored triangle (a receiver's mesh
     // edge crosses the texel). A thin caster stored over a receiver is far
     // more in front and goes on to the silhouette recovery.
-    let own_clear = own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
+    // Without SPSM_THIN (i16's rules): any neighbour's stored surface through
+    // p means lit, and no own-plane rule.
+    let own_clear = !SPSM_THIN || own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
     var texels: array<SpsmTexel, 9>;
     var pattern = 0u;
-    var on_surface = own_clear && own_plane.x <= zeta + own_slack;
+    var on_surface = SPSM_THIN && own_clear && own_plane.x <= zeta + own_slack;
     for (var i = 0u; i < 9u; i++) {
         var t = own;
         if i != 4u {
