@@ -85,6 +85,7 @@ fn fs_composite(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32
     // Depth discontinuities make J meaningless: no density or grid there.
     let dist = length(world - view.eye.xyz);
     let edge = fwidth(dist) > 0.05 * dist;
+    let width = fwidth(texel);
     let surface = depth < 1.0;
     let in_map = light_clip.w > 0.0 && all(abs(light_ndc) <= vec2<f32>(1.0));
 
@@ -102,7 +103,6 @@ fn fs_composite(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32
     }
     if view.flags.y != 0u && surface && in_map && !edge {
         let f = fract(texel);
-        let width = fwidth(texel);
         let line = any(min(f, 1.0 - f) < width * 0.75);
         // Fades out where texels get smaller than about 3 pixels.
         let fade = clamp(1.6 - 4.0 * max(width.x, width.y), 0.0, 1.0);

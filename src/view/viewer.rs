@@ -451,7 +451,7 @@ impl Viewer {
                     if r.accepted { "accepted" } else { "kept" },
                     r.median_new,
                     r.median_prev.map_or_else(|| "-".to_string(), |p| format!("{p:.3}")),
-                    r.fallback.map(|f| format!(" | fallback {f:?}")).unwrap_or_default()
+                    r.fallback.as_ref().map(|f| format!(" | fallback {f:?}")).unwrap_or_default()
                 ),
                 None => format!("optimizer (light {}): no report yet (focused)", self.selected),
             });
@@ -586,7 +586,7 @@ fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Text
         .recv()
         .map_err(|_| ViewError::Config("screenshot readback was dropped".into()))?
         .map_err(crate::render::RenderError::from)?;
-    let mapped = slice.get_mapped_range();
+    let mapped = slice.get_mapped_range().map_err(|e| ViewError::Config(format!("screenshot readback: {e}")))?;
     let mut pixels = Vec::with_capacity((4 * w * h) as usize);
     for y in 0..h as usize {
         let start = y * row as usize;

@@ -78,6 +78,7 @@ struct WindowState {
     surface: wgpu::Surface<'static>,
     surface_config: wgpu::SurfaceConfiguration,
     device: wgpu::Device,
+    queue: wgpu::Queue,
     viewer: Viewer,
     held: HashSet<KeyCode>,
     drag: Option<MouseButton>,
@@ -144,6 +145,7 @@ fn open(event_loop: &ActiveEventLoop, config: ViewConfig) -> Result<WindowState,
         surface,
         surface_config,
         device,
+        queue,
         viewer,
         held: HashSet::new(),
         drag: None,
@@ -317,7 +319,7 @@ fn redraw(state: &mut WindowState, options: &WindowOptions, summary: &mut Window
     let view = frame.texture.create_view(&wgpu::TextureViewDescriptor::default());
     state.viewer.render_to(&view)?;
     state.window.pre_present_notify();
-    frame.present();
+    state.queue.present(frame);
     let first = *state.first_frame.get_or_insert(now);
     summary.frames += 1;
     summary.elapsed = Instant::now() - first;
