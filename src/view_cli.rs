@@ -105,8 +105,7 @@ pub(crate) fn run(args: &ViewArgs) -> Result<(), String> {
     let config = config(args)?;
     let path = args.path.as_deref().map(CameraPath::load).transpose().map_err(|e| e.to_string())?;
     let Some(file) = &args.screenshot else {
-        let options =
-            WindowOptions { frames: args.frames, path, animate_degrees_per_second: args.animate };
+        let options = WindowOptions { frames: args.frames, path, animate_degrees_per_second: args.animate };
         let summary = view::run_window(config, options).map_err(|e| e.to_string())?;
         eprintln!("{} frames, {:.1} fps", summary.frames, summary.fps());
         return Ok(());
@@ -131,7 +130,10 @@ pub(crate) fn run(args: &ViewArgs) -> Result<(), String> {
         file.display()
     );
     if let Some(e) = stats.error {
-        eprintln!("error vs ray-cast truth: {} false shadow, {} false light of {} counted", e.false_shadow, e.false_light, e.counted);
+        eprintln!(
+            "error vs ray-cast truth: {} false shadow, {} false light of {} counted",
+            e.false_shadow, e.false_light, e.counted
+        );
     }
     Ok(())
 }

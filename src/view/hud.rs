@@ -58,8 +58,8 @@ fn draw_text(image: &mut RgbaImage, x: u32, y: u32, text: &str, color: [u8; 3]) 
                 }
                 let p = image.get_pixel_mut(px as u32, py as u32);
                 let a = coverage.clamp(0.0, 1.0);
-                for k in 0..3 {
-                    p.0[k] = (f32::from(p.0[k]) * (1.0 - a) + f32::from(color[k]) * a).round() as u8;
+                for (channel, &c) in p.0.iter_mut().zip(&color) {
+                    *channel = (f32::from(*channel) * (1.0 - a) + f32::from(c) * a).round() as u8;
                 }
                 p.0[3] = p.0[3].max((a * 255.0) as u8);
             });
@@ -83,7 +83,7 @@ pub(crate) fn render(lines: &[String], legend: bool) -> RgbaImage {
     }
     if legend {
         let top = PAD + lines.len() as u32 * LINE + 4;
-        draw_text(&mut image, PAD, top, "density b = screen px per texel, squared", [235, 235, 235]);
+        draw_text(&mut image, PAD, top, "density b (px per texel)², grey: no map", [235, 235, 235]);
         let bar = top + LINE;
         for x in 0..LEGEND_WIDTH {
             // log2(b) from -4 to 8 across the bar.
@@ -94,7 +94,8 @@ pub(crate) fn render(lines: &[String], legend: bool) -> RgbaImage {
             }
         }
         for (label, log2) in [("1/16", -4.0), ("1", 0.0), ("16", 4.0), ("256", 8.0)] {
-            let x = PAD as f64 + f64::from(LEGEND_WIDTH) * (log2 + 4.0) / 12.0 - advance as f64 * label.len() as f64 / 2.0;
+            let x =
+                PAD as f64 + f64::from(LEGEND_WIDTH) * (log2 + 4.0) / 12.0 - advance as f64 * label.len() as f64 / 2.0;
             let x = x.clamp(0.0, f64::from(width) - advance as f64 * label.len() as f64);
             draw_text(&mut image, x as u32, bar + 11, label, [235, 235, 235]);
         }

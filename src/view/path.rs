@@ -61,10 +61,15 @@ impl CameraPath {
             }
             let fields: Vec<&str> = line.split_whitespace().collect();
             if fields.len() != 7 {
-                return Err(format!("line {}: expected 7 fields (frame, eye x y z, target x y z), got {}", n + 1, fields.len()));
+                return Err(format!(
+                    "line {}: expected 7 fields (frame, eye x y z, target x y z), got {}",
+                    n + 1,
+                    fields.len()
+                ));
             }
-            let frame: u64 =
-                fields[0].parse().map_err(|_| format!("line {}: frame {:?} is not a whole number", n + 1, fields[0]))?;
+            let frame: u64 = fields[0]
+                .parse()
+                .map_err(|_| format!("line {}: frame {:?} is not a whole number", n + 1, fields[0]))?;
             let mut v = [0.0; 6];
             for (slot, text) in v.iter_mut().zip(&fields[1..]) {
                 *slot = text

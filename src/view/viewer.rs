@@ -14,8 +14,8 @@ use crate::experiment::{self, MethodKind};
 use crate::mesh::RayCaster;
 use crate::optimize::{OptimizeOptions, ScheduleOptions, SearchStrategy};
 use crate::render::{
-    shadow_map_image, Frame, GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Renderer,
-    RendererOptions, ShadowLookup, ShadowLoop,
+    shadow_map_image, Frame, GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Renderer, RendererOptions,
+    ShadowLookup, ShadowLoop,
 };
 use crate::{LightMatrix, Parameterization, SceneBounds, ShadowMapSize};
 
@@ -115,7 +115,11 @@ impl Viewer {
         format: wgpu::TextureFormat,
     ) -> Result<Self, ViewError> {
         if config.lights == 0 || config.lights > crate::MAX_LIGHTS {
-            return Err(ViewError::Config(format!("{} lights; 1 to {} are supported", config.lights, crate::MAX_LIGHTS)));
+            return Err(ViewError::Config(format!(
+                "{} lights; 1 to {} are supported",
+                config.lights,
+                crate::MAX_LIGHTS
+            )));
         }
         if config.experiment.map == 0 || config.experiment.screen == 0 {
             return Err(ViewError::Config("map and screen sizes must be positive".into()));
@@ -125,7 +129,8 @@ impl Viewer {
         let bounds = scene.bounds();
         let centre = bounds.scene().center();
         let target = start.eye() + start.view_direction() * (centre - start.eye()).length().max(start.z_near() * 10.0);
-        let mut camera = FlyCamera::look_at(start.eye(), target, config.experiment.fov_y_degrees.to_radians(), start.z_far());
+        let mut camera =
+            FlyCamera::look_at(start.eye(), target, config.experiment.fov_y_degrees.to_radians(), start.z_far());
         camera.near = start.z_near();
         let renderer = Renderer::new(device, queue, &scene, RendererOptions::default())?;
         let rig = LightRig::new(&config.experiment, &scene, config.lights);
@@ -311,7 +316,8 @@ impl Viewer {
     pub fn render_to(&mut self, target: &wgpu::TextureView) -> Result<&FrameStats, ViewError> {
         let camera = self.camera.camera(self.size)?;
         let lights = self.rig.lights();
-        let view = LoopView { camera: &camera, lights: &lights, bounds: self.bounds, map: ShadowMapSize::square(self.map) };
+        let view =
+            LoopView { camera: &camera, lights: &lights, bounds: self.bounds, map: ShadowMapSize::square(self.map) };
         let done = self.shadows.frame(&mut self.renderer, &view)?;
         self.matrices.clone_from(&done.matrices);
         self.stats.solve_and_optimize = done.solve_time + done.optimize_time;
@@ -335,11 +341,8 @@ impl Viewer {
         let hud_rect = self.upload_hud();
         let (color, depth) = self.renderer.camera_textures().ok_or(crate::render::RenderError::NothingRendered)?;
         let light = self.matrices.get(self.selected).map_or(glam::Mat4::ZERO, LightMatrix::clip_from_world_f32);
-        let mut raw = CompositeRaw::new(
-            camera.clip_from_world().inverse().as_mat4(),
-            light,
-            camera.eye().as_vec3().extend(1.0),
-        );
+        let mut raw =
+            CompositeRaw::new(camera.clip_from_world().inverse().as_mat4(), light, camera.eye().as_vec3().extend(1.0));
         let map = self.matrices.get(self.selected).map_or((1, 1), |m| (m.map_size.width, m.map_size.height));
         raw.sizes = [self.size.x as f32, self.size.y as f32, map.0 as f32, map.1 as f32];
         raw.flags = [
@@ -374,7 +377,12 @@ impl Viewer {
 
     /// Renders the frame again with masks and compares them with the
     /// ray-cast truth (blocks: the BVH is built on first use).
-    fn compute_error(&mut self, camera: &crate::Camera, lights: &[crate::Light], key: ViewKey) -> Result<(), ViewError> {
+    fn compute_error(
+        &mut self,
+        camera: &crate::Camera,
+        lights: &[crate::Light],
+        key: ViewKey,
+    ) -> Result<(), ViewError> {
         let report = self.renderer.render(&Frame {
             camera,
             lights: &self.matrices,
@@ -413,18 +421,11 @@ impl Viewer {
         let s = &self.stats;
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         let fps = if s.frame_time.is_zero() { 0.0 } else { 1.0 / s.frame_time.as_secs_f64() };
+        let n = self.rig.len();
         let mut lines = vec![
+            format!("{} ({}) map {}² light {}/{n}", self.method.name(), self.lookup.name(), self.map, self.selected),
             format!(
-                "{} ({}) | {} light{} | map {}² | analysis every {} frames",
-                self.method.name(),
-                self.lookup.name(),
-                self.rig.len(),
-                if self.rig.len() == 1 { "" } else { "s" },
-                self.map,
-                self.cadence()
-            ),
-            format!(
-                "frame {}: {:.1} ms ({fps:.1} fps) | solve+optimize {:.1} ms",
+                "frame {}: {:.1} ms ({fps:.1} fps) cpu {:.1} ms",
                 s.frames,
                 ms(s.frame_time),
                 ms(s.solve_and_optimize)
@@ -441,41 +442,41 @@ impl Viewer {
         }
         if self.shadows.policy().analyses() {
             lines.push(match &s.readback {
-                Some(r) => format!("readback: {} frames, {:.1} ms after submit", r.latency.frames, ms(r.latency.ready)),
-                None => "readback: none yet".to_string(),
-            });
-            lines.push(match self.shadows.scheduler().last_report(self.selected) {
                 Some(r) => format!(
-                    "optimizer (light {}): {} | median b {:.3} (prev {}){}",
-                    self.selected,
-                    if r.accepted { "accepted" } else { "kept" },
-                    r.median_new,
-                    r.median_prev.map_or_else(|| "-".to_string(), |p| format!("{p:.3}")),
-                    r.fallback.as_ref().map(|f| format!(" | fallback {f:?}")).unwrap_or_default()
+                    "readback {} fr, {:.1} ms | analysis every {}",
+                    r.latency.frames,
+                    ms(r.latency.ready),
+                    self.cadence()
                 ),
-                None => format!("optimizer (light {}): no report yet (focused)", self.selected),
+                None => format!("readback: none yet | analysis every {}", self.cadence()),
             });
+            match self.shadows.scheduler().last_report(self.selected) {
+                Some(r) => {
+                    lines.push(format!(
+                        "optimizer: {} median b {:.3} (prev {})",
+                        if r.accepted { "accepted" } else { "kept" },
+                        r.median_new,
+                        r.median_prev.map_or_else(|| "-".to_string(), |p| format!("{p:.3}")),
+                    ));
+                    if let Some(f) = &r.fallback {
+                        lines.push(format!("  fallback {f:?}"));
+                    }
+                }
+                None => lines.push("optimizer: no report yet (focused)".to_string()),
+            }
         }
-        let on = |b: bool, name: &str| if b { format!("[{name}]") } else { name.to_string() };
-        lines.push(format!(
-            "overlays: {} {} {} {} | light {}",
-            on(self.overlays.density, "density(T)"),
-            on(self.overlays.grid, "grid(G)"),
-            on(self.overlays.error, "error(X)"),
-            on(self.overlays.shadow_map, "map(M)"),
-            self.selected
-        ));
         if self.overlays.error {
             lines.push(match &self.error {
                 Some(e) => format!(
-                    "error vs ray-cast (frame {}): {} false shadow, {} false light of {}",
+                    "error f{}: {} false shadow, {} false light / {}",
                     e.frame, e.counts.false_shadow, e.counts.false_light, e.counts.counted
                 ),
-                None => "error: view changed, press X to compute".to_string(),
+                None => "error: view changed, press X".to_string(),
             });
         }
-        lines.push("1-7 method  K lookup  [ ] map  , . cadence  L light  arrows/space move light".to_string());
-        lines.push("WASD/QE fly  drag: look (right drag or O: orbit)  wheel zoom  H HUD  Esc quit".to_string());
+        lines.push("1-7 method K lookup [ ] map , . cadence L light".to_string());
+        lines.push("T density G grid X error M map H hud O orbit".to_string());
+        lines.push("WASD QE fly, drag look, wheel zoom, arrows light".to_string());
         lines
     }
 
@@ -548,16 +549,16 @@ fn new_loop(
         MethodKind::Optimized => (LoopPolicy::Optimized, SearchStrategy::Paper),
         MethodKind::OptimizedArgmin => (LoopPolicy::Optimized, SearchStrategy::NelderMead { max_iterations: 150 }),
     };
-    let options = LoopOptions {
-        schedule,
-        optimize: OptimizeOptions { strategy, ..Default::default() },
-        lookup,
-    };
+    let options = LoopOptions { schedule, optimize: OptimizeOptions { strategy, ..Default::default() }, lookup };
     ShadowLoop::new(policy, lights, options).map_err(|e| ViewError::Config(e.to_string()))
 }
 
 /// Reads an RGBA8 texture back (rows padded to 256 bytes for the copy).
-fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Result<image::RgbaImage, ViewError> {
+fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<image::RgbaImage, ViewError> {
     let (w, h) = (texture.width(), texture.height());
     let row = (4 * w).div_ceil(256) * 256;
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
@@ -566,7 +567,8 @@ fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Text
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel view screenshot") });
+    let mut encoder =
+        device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel view screenshot") });
     encoder.copy_texture_to_buffer(
         texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {

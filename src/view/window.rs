@@ -111,14 +111,16 @@ fn open(event_loop: &ActiveEventLoop, config: ViewConfig) -> Result<WindowState,
         .with_title("lixel view")
         .with_inner_size(winit::dpi::PhysicalSize::new(size, size));
     let window = Arc::new(event_loop.create_window(attributes).map_err(|e| ViewError::Window(e.to_string()))?);
-    let descriptor = wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(event_loop.owned_display_handle()));
+    let descriptor =
+        wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(event_loop.owned_display_handle()));
     let instance = wgpu::Instance::new(descriptor);
     let surface = instance.create_surface(window.clone()).map_err(|e| ViewError::Window(e.to_string()))?;
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        compatible_surface: Some(&surface),
-        ..Default::default()
-    }))
-    .map_err(|e| crate::render::RenderError::NoAdapter { tried: e.to_string() })?;
+    let adapter =
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            compatible_surface: Some(&surface),
+            ..Default::default()
+        }))
+        .map_err(|e| crate::render::RenderError::NoAdapter { tried: e.to_string() })?;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("lixel view"),
         required_features: adapter.features() & crate::render::Renderer::optional_features(),
@@ -291,7 +293,11 @@ fn redraw(state: &mut WindowState, options: &WindowOptions, summary: &mut Window
     let held = |code| state.held.contains(&code);
     let axis = |plus, minus| f64::from(u8::from(held(plus))) - f64::from(u8::from(held(minus)));
     let step = state.viewer.camera.speed * dt * if held(KeyCode::ShiftLeft) { 4.0 } else { 1.0 };
-    let fly = DVec3::new(axis(KeyCode::KeyD, KeyCode::KeyA), axis(KeyCode::KeyE, KeyCode::KeyQ), axis(KeyCode::KeyW, KeyCode::KeyS));
+    let fly = DVec3::new(
+        axis(KeyCode::KeyD, KeyCode::KeyA),
+        axis(KeyCode::KeyE, KeyCode::KeyQ),
+        axis(KeyCode::KeyW, KeyCode::KeyS),
+    );
     if fly != DVec3::ZERO {
         state.viewer.camera.fly(fly * step);
     }
