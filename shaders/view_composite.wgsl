@@ -63,45 +63,71 @@ fn inside(p: vec2<f32>, rect: vec4<f32>) -> bool {
     return rect.z > 0.0 && p.x >= rect.x && p.y >= rect.y && p.x < rect.x + rect.z && p.y < rect.y + rect.w;
 }
 
+// The selected light's texel coordinates (row 0 at the top) of the surface
+// seen at `pixel` with camera depth `depth`; z = 1 inside the map, else 0.
+fn texel_at(pixel: vec2<i32>, depth: f32) -> vec3<f32> {
+    let viewport = view.sizes.xy;
+    let centre = vec2<f32>(pixel) + 0.5;
+    // Pixel centre to NDC: row 0 at the top, NDC y up.
+    let ndc = vec3<f32>(centre.x / viewport.x * 2.0 - 1.0, 1.0 - centre.y / viewport.y * 2.0, depth);
+    let world_h = view.world_from_clip * vec4<f32>(ndc, 1.0);
+    let light_clip = view.light_clip_from_world * vec4<f32>(world_h.xyz / world_h.w, 1.0);
+    let light_ndc = light_clip.xy / light_clip.w;
+    let inside = light_clip.w > 0.0 && all(abs(light_ndc) <= vec2<f32>(1.0));
+    return vec3<f32>((light_ndc * vec2<f32>(0.5, -0.5) + 0.5) * view.sizes.zw, select(0.0, 1.0, inside));
+}
+
+fn depth_at(pixel: vec2<i32>) -> f32 {
+    let clamped = clamp(pixel, vec2<i32>(0), vec2<i32>(view.sizes.xy) - 1);
+    return textureLoad(depth_tex, clamped, 0).r;
+}
+
+// The texel step one pixel along `axis`: the central difference on a
+// plane (camera depth is affine in screen space on a plane, so its second
+// difference vanishes), else the one-sided difference towards the
+// neighbour whose depth is closer (the same surface) — no overlay bleeds
+// across silhouettes.
+fn texel_step(pixel: vec2<i32>, depth: f32, texel: vec2<f32>, axis: vec2<i32>) -> vec2<f32> {
+    let d_plus = depth_at(pixel + axis);
+    let d_minus = depth_at(pixel - axis);
+    let forward = texel_at(pixel + axis, d_plus).xy - texel;
+    let backward = texel - texel_at(pixel - axis, d_minus).xy;
+    let df = d_plus - depth;
+    let db = depth - d_minus;
+    if abs(df - db) <= 0.25 * max(abs(df), abs(db)) + 2e-7 {
+        return 0.5 * (forward + backward);
+    }
+    return select(backward, forward, abs(df) < abs(db));
+}
+
 @fragment
 fn fs_composite(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(position.xy);
-    let viewport = view.sizes.xy;
     // Loaded from an sRGB texture: linear colour.
     var color = textureLoad(color_tex, pixel, 0).rgb;
     let depth = textureLoad(depth_tex, pixel, 0).r;
-
-    // The surface point: pixel centre to NDC (row 0 at the top, NDC y up).
-    let ndc = vec3<f32>(position.x / viewport.x * 2.0 - 1.0, 1.0 - position.y / viewport.y * 2.0, depth);
-    let world_h = view.world_from_clip * vec4<f32>(ndc, 1.0);
-    let world = world_h.xyz / world_h.w;
-    let light_clip = view.light_clip_from_world * vec4<f32>(world, 1.0);
-    let light_ndc = light_clip.xy / light_clip.w;
-    // Texel coordinates, row 0 at the top (texel centres at half-integers).
-    let texel = (light_ndc * vec2<f32>(0.5, -0.5) + 0.5) * view.sizes.zw;
-    // J = d(texel)/d(pixel), from neighbouring pixels (uniform control flow).
-    let dx = dpdx(texel);
-    let dy = dpdy(texel);
-    // Depth discontinuities make J meaningless: no density or grid there.
-    let dist = length(world - view.eye.xyz);
-    let edge = fwidth(dist) > 0.05 * dist;
-    let width = fwidth(texel);
+    let here = texel_at(pixel, depth);
+    let texel = here.xy;
     let surface = depth < 1.0;
-    let in_map = light_clip.w > 0.0 && all(abs(light_ndc) <= vec2<f32>(1.0));
+    let in_map = here.z > 0.0;
+    // J = d(texel)/d(pixel) by differences with the neighbours.
+    let dx = texel_step(pixel, depth, texel, vec2<i32>(1, 0));
+    let dy = texel_step(pixel, depth, texel, vec2<i32>(0, 1));
+    let width = abs(dx) + abs(dy);
 
     if view.flags.x != 0u && surface {
-        if in_map && !edge {
+        if in_map {
             // b = ||J||_F^2 / det(J)^2 (score::badness_of_jacobian).
             let det = dx.x * dy.y - dx.y * dy.x;
             let frob = dot(dx, dx) + dot(dy, dy);
             let b = select(1e12, frob / (det * det), abs(det) > 0.0);
             color = mix(color, density_color(b), 0.65);
-        } else if !in_map {
+        } else {
             // Outside the map: grey.
             color = mix(color, vec3<f32>(0.25), 0.6);
         }
     }
-    if view.flags.y != 0u && surface && in_map && !edge {
+    if view.flags.y != 0u && surface && in_map {
         let f = fract(texel);
         let line = any(min(f, 1.0 - f) < width * 0.75);
         // Fades out where texels get smaller than about 3 pixels.

@@ -144,3 +144,75 @@ fn window_under_xvfb() {
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("12 frames"), "{stderr}");
 }
+
+fn linear(srgb: u8) -> f64 {
+    let c = f64::from(srgb) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The density overlay is `score::badness` per pixel: at pixels on a flat
+/// surface (away from edges, found by ray casting), the overlay's colour is
+/// the legend's colour of the CPU's badness at that surface point.
+#[test]
+fn density_overlay_is_the_cpu_badness() {
+    use lixel::mesh::raycast::Ray;
+    let mut c = config();
+    c.method = MethodKind::LiSpsm;
+    let scene = lixel::experiment::load_scene(&c.experiment.scene).unwrap();
+    let Some(mut v) = viewer(c) else { return };
+    let base = v.screenshot(1, None).unwrap();
+    v.set_overlays(Overlays { density: true, ..Overlays::default() });
+    let density = v.screenshot(1, None).unwrap();
+    let matrix = v.matrices()[0];
+    let camera = v.camera.camera(v.size()).unwrap();
+    let caster = lixel::mesh::RayCaster::new(&scene);
+    let world_from_clip = camera.clip_from_world().inverse();
+    let (w, h) = (v.size().x, v.size().y);
+    let hit = |x: u32, y: u32| {
+        let ndc = |z| {
+            let p = glam::DVec3::new(
+                (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0,
+                1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0,
+                z,
+            );
+            world_from_clip.project_point3(p)
+        };
+        let (near, far) = (ndc(0.0), ndc(1.0));
+        let hit = caster.bvh().closest_hit(&Ray { origin: near.as_vec3(), direction: (far - near).as_vec3() }, 1.0)?;
+        let (_, normal) = caster.normals_at(&hit);
+        Some((near + (far - near) * f64::from(hit.t), normal.as_dvec3()))
+    };
+    let (mut tested, mut agreeing) = (0, 0);
+    for y in (4..h - 4).step_by(3) {
+        for x in (4..w - 4).step_by(3) {
+            let Some((point, normal)) = hit(x, y) else { continue };
+            // A flat neighbourhood: the same plane around the pixel.
+            let flat = [(x - 2, y), (x + 2, y), (x, y - 2), (x, y + 2)].iter().all(|&(a, b)| {
+                hit(a, b).is_some_and(|(p, n)| n.dot(normal) > 0.9999 && (p - point).dot(normal).abs() < 1e-3)
+            });
+            let clip = matrix.clip_from_world * point.extend(1.0);
+            let inside = clip.w > 0.0 && (clip.x / clip.w).abs() < 0.98 && (clip.y / clip.w).abs() < 0.98;
+            let Some(b) = lixel::score::badness(&matrix, &camera, point, normal) else { continue };
+            if !flat || !inside || !b.is_finite() {
+                continue;
+            }
+            let want = lixel::view::density_color(b);
+            let (d, o) = (density.get_pixel(x, y).0, base.get_pixel(x, y).0);
+            // The shader mixes 65% of the legend colour into the linear picture.
+            let got: Vec<f64> = (0..3).map(|k| (linear(d[k]) - 0.35 * linear(o[k])) / 0.65).collect();
+            tested += 1;
+            if (0..3).all(|k| (got[k] - want[k]).abs() < 0.06) {
+                agreeing += 1;
+            } else if tested - agreeing <= 3 {
+                eprintln!("pixel ({x}, {y}): b = {b:.4}, want {want:?}, got {got:?}");
+            }
+        }
+    }
+    eprintln!("{agreeing} of {tested} flat pixels inside the map match the CPU badness");
+    assert!(tested > 100, "only {tested} flat pixels inside the map");
+    assert!(agreeing as f64 >= 0.98 * tested as f64, "{agreeing} of {tested} pixels match the CPU badness");
+}

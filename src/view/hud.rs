@@ -24,7 +24,7 @@ fn font() -> Option<&'static FontRef<'static>> {
 /// `shaders/view_composite.wgsl`: log2(b) from -4 to 8; blue, green (b = 1),
 /// yellow (b = 16), red (b = 256). Linear RGB in [0, 1].
 #[must_use]
-pub(crate) fn density_color(b: f64) -> [f64; 3] {
+pub fn density_color(b: f64) -> [f64; 3] {
     let t = ((b.max(1e-12).log2() + 4.0) / 12.0).clamp(0.0, 1.0) * 3.0;
     let stops = [[0.15, 0.3, 1.0], [0.1, 0.85, 0.25], [1.0, 0.85, 0.1], [0.95, 0.1, 0.1]];
     let i = (t.floor() as usize).min(2);

@@ -37,6 +37,7 @@ mod window;
 use std::path::PathBuf;
 
 pub use camera::FlyCamera;
+pub use hud::density_color;
 pub use lights::LightRig;
 pub use path::{CameraKey, CameraPath};
 pub use truth::ErrorCounts;

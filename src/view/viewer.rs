@@ -277,6 +277,12 @@ impl Viewer {
         }
     }
 
+    /// The matrices of the last frame, one per light.
+    #[must_use]
+    pub fn matrices(&self) -> &[LightMatrix] {
+        &self.matrices
+    }
+
     /// The last frame's statistics.
     #[must_use]
     pub fn stats(&self) -> &FrameStats {
