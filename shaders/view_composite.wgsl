@@ -17,8 +17,6 @@ struct View {
     map_rect: vec4<f32>,
     // HUD: (x0, y0, width, height) in pixels; width 0: off.
     hud_rect: vec4<f32>,
-    // The camera's eye (w unused).
-    eye: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;

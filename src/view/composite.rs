@@ -6,7 +6,7 @@
 //! they change.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec4};
+use glam::Mat4;
 
 use crate::render::RenderError;
 
@@ -24,11 +24,10 @@ pub(crate) struct CompositeRaw {
     pub(crate) flags: [u32; 4],
     pub(crate) map_rect: [f32; 4],
     pub(crate) hud_rect: [f32; 4],
-    pub(crate) eye: [f32; 4],
 }
 
 impl CompositeRaw {
-    pub(crate) fn new(world_from_clip: Mat4, light: Mat4, eye: Vec4) -> Self {
+    pub(crate) fn new(world_from_clip: Mat4, light: Mat4) -> Self {
         Self {
             world_from_clip: world_from_clip.to_cols_array_2d(),
             light_clip_from_world: light.to_cols_array_2d(),
@@ -36,7 +35,6 @@ impl CompositeRaw {
             flags: [0; 4],
             map_rect: [0.0; 4],
             hud_rect: [0.0; 4],
-            eye: eye.to_array(),
         }
     }
 }

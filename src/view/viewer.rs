@@ -347,8 +347,7 @@ impl Viewer {
         let hud_rect = self.upload_hud();
         let (color, depth) = self.renderer.camera_textures().ok_or(crate::render::RenderError::NothingRendered)?;
         let light = self.matrices.get(self.selected).map_or(glam::Mat4::ZERO, LightMatrix::clip_from_world_f32);
-        let mut raw =
-            CompositeRaw::new(camera.clip_from_world().inverse().as_mat4(), light, camera.eye().as_vec3().extend(1.0));
+        let mut raw = CompositeRaw::new(camera.clip_from_world().inverse().as_mat4(), light);
         let map = self.matrices.get(self.selected).map_or((1, 1), |m| (m.map_size.width, m.map_size.height));
         raw.sizes = [self.size.x as f32, self.size.y as f32, map.0 as f32, map.1 as f32];
         raw.flags = [
