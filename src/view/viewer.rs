@@ -544,15 +544,26 @@ fn new_loop(
     lookup: ShadowLookup,
 ) -> Result<ShadowLoop, ViewError> {
     let (policy, strategy) = match method {
-        MethodKind::Normal => (LoopPolicy::Fixed(Parameterization::Normal), SearchStrategy::Paper),
-        MethodKind::Focused => (LoopPolicy::Fixed(Parameterization::Focused), SearchStrategy::Paper),
-        MethodKind::LiSpsm => (LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())), SearchStrategy::Paper),
-        MethodKind::Psm => (LoopPolicy::Fixed(Parameterization::Psm(Default::default())), SearchStrategy::Paper),
-        MethodKind::PlaneOptimal => {
+        // A `+spsm` method is its matrix method here: the viewer's lookup is its own setting.
+        MethodKind::Normal | MethodKind::NormalSpsm => {
+            (LoopPolicy::Fixed(Parameterization::Normal), SearchStrategy::Paper)
+        }
+        MethodKind::Focused | MethodKind::FocusedSpsm => {
+            (LoopPolicy::Fixed(Parameterization::Focused), SearchStrategy::Paper)
+        }
+        MethodKind::LiSpsm | MethodKind::LiSpsmSpsm => {
+            (LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())), SearchStrategy::Paper)
+        }
+        MethodKind::Psm | MethodKind::PsmSpsm => {
+            (LoopPolicy::Fixed(Parameterization::Psm(Default::default())), SearchStrategy::Paper)
+        }
+        MethodKind::PlaneOptimal | MethodKind::PlaneOptimalSpsm => {
             (LoopPolicy::Fixed(Parameterization::PlaneOptimal(Default::default())), SearchStrategy::Paper)
         }
-        MethodKind::Optimized => (LoopPolicy::Optimized, SearchStrategy::Paper),
-        MethodKind::OptimizedArgmin => (LoopPolicy::Optimized, SearchStrategy::NelderMead { max_iterations: 150 }),
+        MethodKind::Optimized | MethodKind::OptimizedSpsm => (LoopPolicy::Optimized, SearchStrategy::Paper),
+        MethodKind::OptimizedArgmin | MethodKind::OptimizedArgminSpsm => {
+            (LoopPolicy::Optimized, SearchStrategy::NelderMead { max_iterations: 150 })
+        }
     };
     let options = LoopOptions { schedule, optimize: OptimizeOptions { strategy, ..Default::default() }, lookup };
     ShadowLoop::new(policy, lights, options).map_err(|e| ViewError::Config(e.to_string()))
