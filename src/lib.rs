@@ -45,6 +45,7 @@
 #![warn(missing_docs)]
 
 mod camera;
+pub mod cascade;
 pub mod conventions;
 mod error;
 #[cfg(feature = "cli")]
