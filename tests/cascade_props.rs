@@ -159,11 +159,8 @@ fn every_method_holds_each_cascades_relevant_points() {
         let mut rng = ChaCha8Rng::seed_from_u64(i as u64);
         config.light = sun(i, (config.target - config.eye).normalize(), &mut rng);
         let Some(problem) = config.problem() else { continue };
-        let policy = CascadeSplits {
-            count: 1 + i % 8,
-            scheme: scheme((i % 3) as u8, 0.75),
-            overlap: [0.0, 0.1, 0.5][i % 3],
-        };
+        let policy =
+            CascadeSplits { count: 1 + i % 8, scheme: scheme((i % 3) as u8, 0.75), overlap: [0.0, 0.1, 0.5][i % 3] };
         let cascades = match policy.for_problem(&problem).and_then(|s| CascadeProblems::new(&problem, s)) {
             Ok(c) => c,
             Err(LixelError::InvalidCascades { .. }) => {
@@ -223,7 +220,12 @@ fn every_method_holds_each_cascades_relevant_points() {
         }
     }
     eprintln!("{n} configurations: {solved} cascade matrices, {checked} points checked, {thin} ranges too thin");
-    assert!(failures.is_empty(), "{} failures; first:\n{}", failures.len(), failures[..failures.len().min(5)].join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} failures; first:\n{}",
+        failures.len(),
+        failures[..failures.len().min(5)].join("\n")
+    );
     assert!(thin * 20 < n, "{thin} of {n} split ranges were too thin");
     assert!(checked > 1000, "only {checked} points checked");
 }
@@ -239,15 +241,28 @@ fn walkthrough() -> SyntheticScene {
     s
 }
 
-/// Relevant pixels (shadowed, or next to a shadow boundary) of a readback,
+/// Relevant pixels (shadowed, or next to a shadow boundary) of a readback
+/// cut to the view depths `[near, far]` (pixels outside count as empty),
 /// recomputed independently, with their view depths.
-fn relevant_pixels(camera: &Camera, rb: &lixel::synthetic::SyntheticReadback) -> Vec<(DVec3, f64)> {
+fn relevant_pixels(
+    camera: &Camera,
+    rb: &lixel::synthetic::SyntheticReadback,
+    (near, far): (f64, f64),
+) -> Vec<(DVec3, f64)> {
     let (w, h) = (rb.width as usize, rb.height as usize);
     let world_from_screen = camera.screen_from_world().inverse();
     let step = camera.viewport().as_dvec2() / glam::DVec2::new(w as f64, h as f64);
+    let point = |x: usize, y: usize| {
+        let pixel = (glam::DVec2::new(x as f64, y as f64) + 0.5) * step;
+        world_from_screen.project_point3(pixel.extend(f64::from(rb.depth[y * w + x])))
+    };
     let lit = |x: i64, y: i64| -> Option<bool> {
         let (x, y) = (usize::try_from(x).ok()?, usize::try_from(y).ok()?);
-        (x < w && y < h && rb.depth[y * w + x] < 1.0).then(|| rb.shadow_bits[y * w + x] & 1 == 0)
+        let inside = x < w && y < h && rb.depth[y * w + x] < 1.0 && {
+            let d = camera.view_depth(point(x, y));
+            d >= near && d <= far
+        };
+        inside.then(|| rb.shadow_bits[y * w + x] & 1 == 0)
     };
     let mut out = Vec::new();
     for y in 0..h as i64 {
@@ -255,9 +270,7 @@ fn relevant_pixels(camera: &Camera, rb: &lixel::synthetic::SyntheticReadback) ->
             let Some(here) = lit(x, y) else { continue };
             let mixed = (-1..=1).any(|dy| (-1..=1).any(|dx| lit(x + dx, y + dy).is_some_and(|l| l != here)));
             if !here || mixed {
-                let i = y as usize * w + x as usize;
-                let pixel = (glam::DVec2::new(x as f64, y as f64) + 0.5) * step;
-                let p = world_from_screen.project_point3(pixel.extend(f64::from(rb.depth[i])));
+                let p = point(x as usize, y as usize);
                 out.push((p, camera.view_depth(p)));
             }
         }
@@ -276,8 +289,9 @@ fn optimized_cascades_hold_their_slices_samples_along_a_walk() {
     let (mut optimized, mut checked) = (0, 0);
     for step in 0..6 {
         let eye = DVec3::new(0.3 * step as f64, 1.7, 6.0 - 2.0 * step as f64);
-        let camera = Camera::look_at(eye, eye + DVec3::new(0.1, -0.15, -1.0), DVec3::Y, 1.1, UVec2::new(640, 480), 0.1, 400.0)
-            .unwrap();
+        let camera =
+            Camera::look_at(eye, eye + DVec3::new(0.1, -0.15, -1.0), DVec3::Y, 1.1, UVec2::new(640, 480), 0.1, 400.0)
+                .unwrap();
         let problem = ShadowProblem::new(camera, sun, bounds, ShadowMapSize::square(256)).unwrap();
         let rb = scene.render(&camera, &[sun], 64, 48);
         let readback = rb.as_readback(step % 2 == 0);
@@ -288,14 +302,14 @@ fn optimized_cascades_hold_their_slices_samples_along_a_walk() {
         let cascades = CascadeProblems::new(&problem, splits.clone()).unwrap();
         let samples = CascadeOptimizer::samples(&cascades, &readback, 0, &SampleOptions::default()).unwrap();
         let results = optimizer.optimize(&samples).unwrap();
-        let pixels = relevant_pixels(&camera, &rb);
         for (k, result) in results.iter().enumerate() {
             let m = &result.as_ref().unwrap().matrix;
             optimized += usize::from(result.as_ref().unwrap().report.fallback.is_none());
             // Away from the slice ends by more than f32 rounding of depth.
             let (a, b) = splits.slice(k);
             let (a, b) = (a * (1.0 + 1e-5), b * (1.0 - 1e-5));
-            for &(p, _) in pixels.iter().filter(|(_, d)| *d >= a && *d <= b) {
+            for (p, _) in relevant_pixels(&camera, &rb, splits.slice(k)).into_iter().filter(|(_, d)| *d >= a && *d <= b)
+            {
                 checked += 1;
                 check_point(&cascades.problems()[k], m, p).unwrap_or_else(|e| panic!("step {step} cascade {k}: {e}"));
             }

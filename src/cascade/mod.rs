@@ -91,7 +91,7 @@ impl CascadeSplits {
         if !(1..=MAX_CASCADES).contains(&self.count) {
             return Err(invalid("cascade count must be 1 to MAX_CASCADES"));
         }
-        if !(self.overlap >= 0.0 && self.overlap < 1.0) {
+        if !(0.0..1.0).contains(&self.overlap) {
             return Err(invalid("overlap must be in [0, 1)"));
         }
         if let SplitScheme::Practical { lambda } = self.scheme {
@@ -202,7 +202,7 @@ impl Splits {
         if !(1..=MAX_CASCADES).contains(&k) {
             return Err(invalid("cascade count must be 1 to MAX_CASCADES"));
         }
-        if !(overlap >= 0.0 && overlap < 1.0) {
+        if !(0.0..1.0).contains(&overlap) {
             return Err(invalid("overlap must be in [0, 1)"));
         }
         if boundaries.iter().any(|b| !b.is_finite()) || boundaries.windows(2).any(|w| !(w[1] > w[0])) {
@@ -407,6 +407,49 @@ mod tests {
         assert!(matches!(ok.place(1e15, 1e15 + 0.25), Err(LixelError::InvalidCascades { .. })));
         assert!(Splits::from_boundaries(&[1.0, 1.0], 0.0).is_err());
         assert!(Splits::from_boundaries(&[1.0], 0.0).is_err());
+    }
+
+    #[test]
+    fn a_slice_problem_sees_only_its_slice() {
+        use glam::{DVec3, UVec2};
+        let camera = Camera::look_at(
+            DVec3::new(0.0, 1.7, 0.0),
+            DVec3::new(0.0, 1.0, -10.0),
+            DVec3::Y,
+            1.0,
+            UVec2::new(64, 48),
+            0.1,
+            1000.0,
+        )
+        .unwrap();
+        let scene = crate::Aabb::from_corners(DVec3::new(-800.0, 0.0, -800.0), DVec3::new(800.0, 4.0, 800.0));
+        let sun = crate::Light::directional(DVec3::new(0.3, -1.0, 0.2));
+        let problem =
+            ShadowProblem::new(camera, sun, crate::SceneBounds::uniform(scene), crate::ShadowMapSize::square(256))
+                .unwrap();
+        let cascades = CascadeProblems::new(&problem, CascadeSplits::default().for_problem(&problem).unwrap()).unwrap();
+        let mut widths = Vec::new();
+        for (k, p) in cascades.problems().iter().enumerate() {
+            let (near, far) = cascades.splits().slice(k);
+            assert!(
+                (p.camera().z_near() - near).abs() <= 1e-12 * far && (p.camera().z_far() - far).abs() <= 1e-9 * far
+            );
+            let body = p.visible_receiver_body();
+            assert!(!body.is_empty());
+            for v in body.vertices() {
+                let d = camera.view_depth(*v);
+                assert!(
+                    d >= near * (1.0 - 1e-9) && d <= far * (1.0 + 1e-9),
+                    "cascade {k}: depth {d} outside [{near}, {far}]"
+                );
+            }
+            let m = p.solve(&Parameterization::Focused).unwrap();
+            // World width of the map along its first axis: grows with the slice.
+            widths.push(2.0 / m.clip_from_world.row(0).truncate().length());
+        }
+        assert!(widths.windows(2).all(|w| w[1] > w[0]), "{widths:?}");
+        let full = problem.solve(&Parameterization::Focused).unwrap();
+        assert!(widths[0] * 10.0 < 2.0 / full.clip_from_world.row(0).truncate().length(), "{widths:?}");
     }
 
     #[test]

@@ -181,10 +181,7 @@ impl CascadeOptimizer {
     /// An optimizer for up to `count` cascades.
     #[must_use]
     pub fn new(count: usize, options: &OptimizeOptions) -> Self {
-        Self {
-            optimizers: (0..count).map(|_| Optimizer::new(options.clone())).collect(),
-            previous: vec![None; count],
-        }
+        Self { optimizers: (0..count).map(|_| Optimizer::new(options.clone())).collect(), previous: vec![None; count] }
     }
 
     /// Cascade `k`'s current matrix, if it was optimized.
@@ -228,7 +225,7 @@ impl CascadeOptimizer {
             .map(|(k, s)| {
                 let result = self.optimizers[k].optimize(s, self.previous[k].as_ref());
                 if let Ok(optimized) = &result {
-                    self.previous[k] = Some(optimized.matrix.clone());
+                    self.previous[k] = Some(optimized.matrix);
                 }
                 result
             })
@@ -244,12 +241,24 @@ mod tests {
     use crate::{Aabb, Light, SceneBounds, ShadowMapSize};
 
     fn problem() -> ShadowProblem {
-        let camera =
-            Camera::look_at(DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.0, 1.0, -10.0), DVec3::Y, 1.0, UVec2::new(64, 64), 0.1, 500.0)
-                .unwrap();
+        let camera = Camera::look_at(
+            DVec3::new(0.0, 2.0, 0.0),
+            DVec3::new(0.0, 1.0, -10.0),
+            DVec3::Y,
+            1.0,
+            UVec2::new(64, 64),
+            0.1,
+            500.0,
+        )
+        .unwrap();
         let scene = Aabb::from_corners(DVec3::new(-300.0, 0.0, -300.0), DVec3::new(300.0, 5.0, 300.0));
-        ShadowProblem::new(camera, Light::directional(DVec3::new(1.0, -1.0, 0.2)), SceneBounds::uniform(scene), ShadowMapSize::square(64))
-            .unwrap()
+        ShadowProblem::new(
+            camera,
+            Light::directional(DVec3::new(1.0, -1.0, 0.2)),
+            SceneBounds::uniform(scene),
+            ShadowMapSize::square(64),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -274,7 +283,8 @@ mod tests {
         // Nothing seen: the fixed splits of the camera range within the scene.
         let fixed = tracker.update(&problem, None).unwrap().clone();
         assert_eq!(fixed.near(), 0.1);
-        let deepest = problem.bounds().scene().corners().iter().map(|&p| problem.camera().view_depth(p)).fold(0.0, f64::max);
+        let deepest =
+            problem.bounds().scene().corners().iter().map(|&p| problem.camera().view_depth(p)).fold(0.0, f64::max);
         assert!(fixed.far() >= deepest && fixed.far() < deepest * (1.0 + 1e-5), "{fixed:?} vs {deepest}");
         assert!(SplitTracker::new(CascadeSplits::default(), f64::NAN).is_err());
     }
