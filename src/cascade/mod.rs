@@ -256,8 +256,10 @@ impl Splits {
     /// `b_k <= depth < b_(k+1)` (the last cascade includes the far end), and
     /// the weight of cascade `k + 1` in the blend band, rising linearly from
     /// 0 at `b_(k+1) - band(k)` towards 1 at `b_(k+1)`. `None` outside
-    /// `[near, far]` or for a non-finite depth. The renderer's shaders
-    /// implement the same rule (`shaders/cascades.wgsl`).
+    /// `[near, far]` or for a non-finite depth. The renderer implements the
+    /// same choice, without the blend (`render::Renderer::set_cascades`,
+    /// `cascade_owns` in `shaders/common.wgsl`; `tests/render_cascades.rs`
+    /// checks that they agree).
     #[must_use]
     pub fn choose(&self, depth: f64) -> Option<CascadeChoice> {
         if !(depth >= self.near() && depth <= self.far()) {
