@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --example cascades -- [--cascades 4] [--map 1024] [--size 512]
-//!     [--preset large|default] [--suns 6] [--triangles 300000]
+//!     [--preset large|default] [--suns 6] [--triangles 300000] [--picture cascades.png]
 //! ```
 //!
 //! Methods: `focused` and `lispsm` (one map of `(s·√K)²`); `csm` (practical
@@ -59,6 +59,33 @@ fn render_masks(
     renderer.render(&frame).map_err(|e| e.to_string())?;
     let masks = renderer.read_masks().map_err(|e| e.to_string())?;
     Ok(if splits.is_some() { sun_masks(&masks) } else { masks })
+}
+
+/// The last frame's picture with each pixel tinted by the cascade that
+/// shaded it (its facing bit): red, green, blue, yellow, ...
+fn picture(renderer: &Renderer, path: &str) -> Result<(), String> {
+    const TINTS: [[f32; 3]; 8] = [
+        [1.0, 0.3, 0.3],
+        [0.3, 1.0, 0.3],
+        [0.4, 0.5, 1.0],
+        [1.0, 1.0, 0.3],
+        [1.0, 0.3, 1.0],
+        [0.3, 1.0, 1.0],
+        [1.0, 0.6, 0.2],
+        [0.7, 0.7, 0.7],
+    ];
+    let mut image = renderer.read_color().map_err(|e| e.to_string())?;
+    let masks = renderer.read_masks().map_err(|e| e.to_string())?;
+    for (i, px) in image.pixels_mut().enumerate() {
+        let f = masks.facing[i];
+        if f != 0 {
+            let tint = TINTS[f.trailing_zeros() as usize % 8];
+            for c in 0..3 {
+                px.0[c] = (f32::from(px.0[c]) * 0.55 + 255.0 * 0.45 * tint[c]).min(255.0) as u8;
+            }
+        }
+    }
+    image.save(path).map_err(|e| format!("{path}: {e}"))
 }
 
 fn solve_all(cascades: &CascadeProblems, p: &Parameterization) -> Result<Vec<LightMatrix>, String> {
