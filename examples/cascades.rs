@@ -157,6 +157,9 @@ fn run() -> Result<(), String> {
         // sdsm: the visible depth range of a first frame's readback (here the
         // csm frame's full-resolution depth).
         let depth_frame = render_masks(&mut renderer, &camera, &m, Some(fixed.splits()))?;
+        if let (0, Some(path)) = (s, args.value("--picture")) {
+            picture(&renderer, path)?;
+        }
         let bits = vec![0u32; depth_frame.depth.len()];
         let rb = Readback {
             width: size,
