@@ -80,8 +80,8 @@ fn picture(renderer: &Renderer, path: &str) -> Result<(), String> {
         let f = masks.facing[i];
         if f != 0 {
             let tint = TINTS[f.trailing_zeros() as usize % 8];
-            for c in 0..3 {
-                px.0[c] = (f32::from(px.0[c]) * 0.55 + 255.0 * 0.45 * tint[c]).min(255.0) as u8;
+            for (v, t) in px.0.iter_mut().zip(tint) {
+                *v = (f32::from(*v) * 0.55 + 255.0 * 0.45 * t).min(255.0) as u8;
             }
         }
     }
