@@ -115,7 +115,7 @@ fn fs_analysis_depth(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<u3
     for (var k = 0u; k < count; k++) {
         let i = lights.lookup[k / 4u][k % 4u];
         let light = lights.items[i];
-        if dot(n, to_light(light, world)) > 0.0 && in_cone(light, world) {
+        if dot(n, to_light(light, world)) > 0.0 && in_cone(light, world) && cascade_owns(light, world) {
             facing |= 1u << i;
             if in_shadow(light, world) {
                 shadow |= 1u << i;

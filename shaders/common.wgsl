@@ -17,6 +17,8 @@ struct Camera {
     eye: vec4<f32>,
     // x: ambient light level; yz: analysis resolution; w: unused.
     params: vec4<f32>,
+    // dot(view_depth, (world, 1)): distance along the view direction.
+    view_depth: vec4<f32>,
 }
 
 struct Light {
@@ -31,9 +33,10 @@ struct Light {
     // layer of the shadow-map array (layers are as large as the largest map).
     map_size: vec2<f32>,
     layer: u32,
-    // Reserved (0).
+    // Bit 0: a cascade, looked up only at view depths [depth.z, depth.w).
     flags: u32,
-    // Linear light depth: (min distance, 1 / (max - min), 0, 0); see shadow.wgsl.
+    // Linear light depth: (min distance, 1 / (max - min), ..); see
+    // shadow.wgsl. zw: a cascade's view-depth range (flags bit 0).
     depth: vec4<f32>,
     // A spot light's cone: (unit axis, cos of the half-angle); w < -1 for
     // lights without one.
@@ -90,6 +93,18 @@ fn in_cone(light: Light, world: vec3<f32>) -> bool {
     return light.spot.w < -1.0 || dot(light.spot.xyz, to_world) >= light.spot.w * length(to_world);
 }
 
+// Whether `light` applies at `world`: always, except for a cascade (flags
+// bit 0) outside the view depths it owns. The cascades of one sun own
+// consecutive ranges, so exactly one of them applies per pixel; the CPU
+// twin is `lixel::cascade::Splits::choose`.
+fn cascade_owns(light: Light, world: vec3<f32>) -> bool {
+    if (light.flags & 1u) == 0u {
+        return true;
+    }
+    let d = dot(camera.view_depth, vec4<f32>(world, 1.0));
+    return d >= light.depth.z && d < light.depth.w;
+}
+
 struct Shading {
     // Linear RGB.
     color: vec3<f32>,
@@ -109,6 +124,9 @@ fn shade(in: VertexOutput) -> Shading {
     let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.items[i];
+        if !cascade_owns(light, in.world) {
+            continue;
+        }
         let n_dot_l = dot(n, normalize(to_light(light, in.world)));
         if n_dot_l > 0.0 && in_cone(light, in.world) {
             out.facing |= 1u << i;

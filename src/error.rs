@@ -109,6 +109,14 @@ pub enum LixelError {
         /// What is wrong with them.
         reason: &'static str,
     },
+    /// A cascade split policy or split range cannot be used (count outside
+    /// `1..=MAX_CASCADES`, overlap outside `[0, 1)`, an empty or too thin
+    /// depth range): see [`cascade`](crate::cascade).
+    #[error("invalid cascades: {reason}")]
+    InvalidCascades {
+        /// What is wrong with them.
+        reason: &'static str,
+    },
 }
 
 /// Result alias used throughout the crate.

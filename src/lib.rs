@@ -22,7 +22,8 @@
 //! | `LiSpsm` | perspective frustum in light space along the projected view direction, simple or general `n_opt` | Wimmer, Scherzer & Purgathofer 2004 |
 //! | `PlaneOptimal` | exactly uniform sampling on one receiver plane | Chong & Gortler 2004 |
 //!
-//! Start with [`ShadowProblem`].
+//! Start with [`ShadowProblem`]. Sun lights over long views: [`cascade`]
+//! (one problem per depth slice of the view, each solved by any method).
 //!
 //! ## Conventions
 //! Inside, wgpu's: right-handed view space, clip depth in `[0, 1]`, NDC `y`
@@ -45,6 +46,7 @@
 #![warn(missing_docs)]
 
 mod camera;
+pub mod cascade;
 pub mod conventions;
 mod error;
 #[cfg(feature = "cli")]

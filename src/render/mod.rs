@@ -74,6 +74,17 @@ use passes::{CameraTargets, SceneLayouts, Target, MASKS_FORMAT, MAX_SHADOW_SLOTS
 use timing::GpuTimer;
 use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw};
 
+/// The next `f32` above a finite `x`.
+fn next_f32_up(x: f32) -> f32 {
+    if x == 0.0 {
+        f32::from_bits(1)
+    } else if x > 0.0 {
+        f32::from_bits(x.to_bits() + 1)
+    } else {
+        f32::from_bits(x.to_bits() - 1)
+    }
+}
+
 /// Why the renderer refused a request.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -278,6 +289,9 @@ pub struct Renderer {
     last_lights: Vec<LightMatrix>,
     /// The lookup mode of the last frame (index into `lookups`).
     last_lookup: Option<usize>,
+    /// Light `i` is a cascade owning view depths `depth_ranges[i]`
+    /// ([`Renderer::set_cascades`]).
+    depth_ranges: Vec<Option<(f32, f32)>>,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -418,12 +432,33 @@ impl Renderer {
             frame: 0,
             last_lights: Vec::new(),
             last_lookup: None,
+            depth_ranges: Vec::new(),
             options,
             errors,
             depth_copy: std::sync::OnceLock::new(),
         };
         renderer.errors.take(device, "renderer buffers and targets")?;
         Ok(renderer)
+    }
+
+    /// Makes lights cascades from the next frame on: light `first + k` is
+    /// cascade `k` of `splits` and is looked up (shadow bit, facing bit and
+    /// light) only where the pixel's view depth lies in the range cascade
+    /// `k` owns, `[b_k, b_(k+1))` (the last includes the far end): the
+    /// per-pixel choice of [`Splits::choose`](crate::cascade::Splits::choose),
+    /// without blending. Frame `lights` hold the cascades' matrices at those
+    /// indices; the sun's shadow bit is the OR of the cascades' bits (at most
+    /// one is set per pixel). Other lights are unaffected; `None` for a
+    /// `splits` clears the lights from `first` on.
+    pub fn set_cascades(&mut self, first: usize, splits: Option<&crate::cascade::Splits>) {
+        self.depth_ranges.truncate(first);
+        let Some(splits) = splits else { return };
+        self.depth_ranges.resize(first, None);
+        let b = splits.boundaries();
+        for k in 0..splits.count() {
+            let end = if k + 1 == splits.count() { next_f32_up(b[k + 1] as f32) } else { b[k + 1] as f32 };
+            self.depth_ranges.push(Some((b[k] as f32, end)));
+        }
     }
 
     /// The adapter the device was opened on.
@@ -589,7 +624,15 @@ impl Renderer {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
         let raw_lights = |lights: &[LightMatrix], layer: &dyn Fn(usize) -> u32| -> Vec<LightRaw> {
             let color = light_color(lights.len());
-            lights.iter().enumerate().map(|(i, m)| LightRaw::to_raw(m, layer(i), color)).collect()
+            let range = |i: usize| self.depth_ranges.get(i).copied().flatten();
+            lights
+                .iter()
+                .enumerate()
+                .map(|(i, m)| {
+                    let raw = LightRaw::to_raw(m, layer(i), color);
+                    range(i).map_or(raw, |r| raw.with_depth_range(r))
+                })
+                .collect()
         };
         self.queue.write_buffer(
             &self.camera_uniforms,

@@ -22,6 +22,9 @@ pub(crate) struct CameraRaw {
     eye: [f32; 4],
     /// (ambient, analysis width, analysis height, 0).
     params: [f32; 4],
+    /// View depth row: `dot(view_depth, (world, 1))` is the distance along
+    /// the view direction (the cascade choice, `shaders/common.wgsl`).
+    view_depth: [f32; 4],
 }
 
 impl CameraRaw {
@@ -33,6 +36,10 @@ impl CameraRaw {
             world_from_clip: clip_from_world.inverse().as_mat4().to_cols_array_2d(),
             eye: camera.eye().as_vec3().extend(1.0).to_array(),
             params: [ambient, analysis_size.0 as f32, analysis_size.1 as f32, 0.0],
+            view_depth: {
+                let row = -camera.view_from_world().row(2);
+                row.as_vec4().to_array()
+            },
         }
     }
 }
@@ -74,6 +81,16 @@ impl LightRaw {
                 None => [0.0, 0.0, 0.0, -2.0],
             },
         }
+    }
+
+    /// Makes this light a cascade that owns view depths `[start, end)`
+    /// (`flags` bit 0; the range in `depth.zw`): the passes look it up only
+    /// there (`cascade_owns` in `shaders/common.wgsl`).
+    pub(crate) fn with_depth_range(mut self, (start, end): (f32, f32)) -> Self {
+        self.flags |= 1;
+        self.depth[2] = start;
+        self.depth[3] = end;
+        self
     }
 }
 

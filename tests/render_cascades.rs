@@ -1,0 +1,93 @@
+//! Cascades in the renderer: each cascade's map is looked up exactly where
+//! the CPU's per-pixel choice ([`Splits::choose`]) puts the pixel, on every
+//! backend (the facing bits of the masks show which cascade a pixel used),
+//! and the cascaded sun's shadow (the OR of its cascades' bits) agrees with
+//! ray-cast truth about as well as one focused map.
+
+#![cfg(feature = "render")]
+
+mod render_common;
+
+use glam::{DVec2, DVec3, UVec2};
+use lixel::cascade::{CascadeProblems, CascadeSplits, SplitScheme};
+use lixel::mesh::RayCaster;
+use lixel::render::{Frame, Renderer, RendererOptions};
+use lixel::{Camera, Light, Parameterization, ShadowMapSize, ShadowProblem};
+use render_common::*;
+
+#[test]
+fn each_pixel_uses_the_cascade_the_cpu_chooses() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let size = 128;
+    let camera = Camera::look_at(
+        DVec3::new(-30.0, 2.5, 30.0),
+        DVec3::new(10.0, 0.0, -10.0),
+        DVec3::Y,
+        60f64.to_radians(),
+        UVec2::splat(size),
+        0.2,
+        150.0,
+    )
+    .unwrap();
+    let sun = Light::directional(DVec3::new(0.5, -1.0, 0.3));
+    let problem = ShadowProblem::new(camera, sun, scene.bounds(), ShadowMapSize::square(256)).unwrap();
+    let policy = CascadeSplits { count: 4, scheme: SplitScheme::Practical { lambda: 0.75 }, overlap: 0.1 };
+    let cascades = CascadeProblems::new(&problem, policy.for_problem(&problem).unwrap()).unwrap();
+    let splits = cascades.splits().clone();
+    let matrices: Vec<_> = cascades.solve(&Parameterization::Focused).into_iter().collect::<Result<_, _>>().unwrap();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    renderer.set_cascades(0, Some(&splits));
+    let frame = Frame { camera: &camera, lights: &matrices, masks: true, analysis: None, lookup: Default::default() };
+    renderer.render(&frame).unwrap();
+    let masks = renderer.read_masks().unwrap();
+
+    let world_from_screen = camera.screen_from_world().inverse();
+    let (mut checked, mut used) = (0usize, [0usize; 4]);
+    let mut disagree = Vec::new();
+    for y in 0..size {
+        for x in 0..size {
+            let i = (y * size + x) as usize;
+            if !masks.visible(i) || masks.facing[i] == 0 {
+                continue;
+            }
+            let pixel = DVec2::new(f64::from(x), f64::from(y)) + 0.5;
+            let world = world_from_screen.project_point3(pixel.extend(f64::from(masks.depth[i])));
+            let d = camera.view_depth(world);
+            let Some(choice) = splits.choose(d) else { continue };
+            // f32 shading positions: leave pixels at a boundary out.
+            if splits.boundaries().iter().any(|b| (d - b).abs() <= 1e-3 * b) {
+                continue;
+            }
+            checked += 1;
+            used[choice.index] += 1;
+            if masks.facing[i] != 1 << choice.index || masks.shadow[i] & !masks.facing[i] != 0 {
+                disagree.push(format!(
+                    "({x}, {y}) depth {d}: facing {:#b}, shadow {:#b}, cpu {}",
+                    masks.facing[i], masks.shadow[i], choice.index
+                ));
+            }
+        }
+    }
+    eprintln!("{checked} pixels checked; per cascade {used:?}; splits {:?}", splits.boundaries());
+    assert!(disagree.is_empty(), "{} of {checked} disagree: {:?}", disagree.len(), &disagree[..disagree.len().min(5)]);
+    assert!(checked > 2000 && used.iter().all(|&n| n > 50), "{checked} checked, per cascade {used:?}");
+
+    // The sun's bit is the OR of its cascades'; it agrees with ray-cast
+    // truth about as well as one focused map of the same size.
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &[sun], size, size);
+    let mut sun_masks = masks.clone();
+    for (s, f) in sun_masks.shadow.iter_mut().zip(sun_masks.facing.iter_mut()) {
+        *s = u32::from(*s != 0);
+        *f = u32::from(*f != 0);
+    }
+    let cascaded = sun_masks.misclassified(&truth, 0).unwrap();
+    let single = [problem.solve(&Parameterization::Focused).unwrap()];
+    renderer.set_cascades(0, None);
+    renderer
+        .render(&Frame { camera: &camera, lights: &single, masks: true, analysis: None, lookup: Default::default() })
+        .unwrap();
+    let focused = renderer.read_masks().unwrap().misclassified(&truth, 0).unwrap();
+    eprintln!("misclassified: 4 cascades of 256² {cascaded}, one focused 256² {focused}");
+    assert!(cascaded <= focused, "cascades {cascaded} vs one focused map {focused}");
+}
