@@ -97,6 +97,10 @@ struct ExperimentArgs {
     /// Configurations for the resolution equivalence (0 turns it off).
     #[arg(long)]
     equivalence: Option<usize>,
+    /// Sub-samples per pixel of the coverage truth behind
+    /// `mean_visibility_error` (8, 16, 32; 0 turns it off; default 32).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(["0", "8", "16", "32"]).map(|s| s.parse::<u32>().unwrap_or(32)))]
+    coverage_samples: Option<u32>,
     /// Report directory.
     #[arg(long, default_value = "report")]
     out: PathBuf,
@@ -242,6 +246,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
         c.truth = t;
     }
     c.equivalence_configs = args.equivalence.unwrap_or(c.equivalence_configs);
+    c.coverage_samples = args.coverage_samples.unwrap_or(c.coverage_samples);
     c.out.clone_from(&args.out);
     c.resume = args.resume;
     c.force = args.force;

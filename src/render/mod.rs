@@ -45,6 +45,7 @@ mod options;
 mod output;
 mod passes;
 pub mod readback;
+pub mod subpixel;
 mod timing;
 mod uniforms;
 
