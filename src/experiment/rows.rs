@@ -198,7 +198,9 @@ impl ConfigWriter {
                 false_lit: result.counts.map(|c| c.false_lit),
                 frames: result.frames,
                 truth: outcome.truth_disagreement,
-                visibility_error: result.visibility.map(|v| v.sum),
+                // Rounded as configs.csv stores it, so a summary from these rows
+                // equals one from the file (resume, merge) to the last digit.
+                visibility_error: result.visibility.map(|v| format!("{:.6}", v.sum).parse().unwrap_or(v.sum)),
                 note: result.note.clone(),
             })
             .collect();
