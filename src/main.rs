@@ -18,6 +18,9 @@ use lixel::render::Gpu;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
+#[cfg(feature = "view")]
+mod view_cli;
+
 #[derive(Parser)]
 #[command(
     name = "lixel",
@@ -41,6 +44,11 @@ enum Command {
     /// print how well each samples the visible floor (badness: screen pixels
     /// per texel, squared; lower is better).
     Methods(MethodsArgs),
+    /// An interactive viewer: fly through the scene, switch methods, see
+    /// texel density, the texel grid and errors against ray-cast truth.
+    /// `--screenshot FILE --frames N` renders offscreen without a display.
+    #[cfg(feature = "view")]
+    View(Box<view_cli::ViewArgs>),
 }
 
 #[derive(clap::Args)]
@@ -152,7 +160,7 @@ struct ExperimentArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum BackendArg {
+pub(crate) enum BackendArg {
     /// `WGPU_BACKEND` when set, else Vulkan (lavapipe without a GPU), else GL (llvmpipe).
     Auto,
     /// Vulkan only.
@@ -194,7 +202,7 @@ struct MethodsArgs {
     samples: u32,
 }
 
-fn parse_vec3(s: &str) -> Result<DVec3, String> {
+pub(crate) fn parse_vec3(s: &str) -> Result<DVec3, String> {
     let v: Vec<f64> = s
         .split(',')
         .map(|c| c.trim().parse::<f64>().map_err(|_| format!("{:?} is not a number (expected x,y,z)", c.trim())))
@@ -257,7 +265,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
 }
 
 /// A device on the chosen backend (lavapipe or llvmpipe on machines without a GPU).
-fn gpu(backend: BackendArg) -> Result<Gpu, String> {
+pub(crate) fn gpu(backend: BackendArg) -> Result<Gpu, String> {
     let backends = match backend {
         BackendArg::Auto => None,
         BackendArg::Vulkan => Some(wgpu::Backends::VULKAN),
@@ -446,6 +454,8 @@ fn main() -> ExitCode {
         Command::Experiment(args) => run_experiment(args),
         Command::Merge(args) => run_merge(args),
         Command::Methods(args) => run_methods(args),
+        #[cfg(feature = "view")]
+        Command::View(args) => view_cli::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
