@@ -43,6 +43,13 @@ fn quick_preset_writes_a_consistent_report_deterministically_and_resumes() {
     for m in MethodKind::ALL {
         assert!(summary_rows.iter().any(|r| r[0] == m.name()), "{} missing from summary.csv", m.name());
     }
+    // mean_visibility_error (the coverage truth, 32 sub-samples): a share
+    // in (0, 1) for every method, the last column of summary.csv.
+    assert!(header.lines().next().unwrap().ends_with(",mean_visibility_error"));
+    for m in &summary.methods {
+        let e = m.mean_visibility_error.expect("the quick preset traces the coverage truth");
+        assert!(e > 0.0 && e < 1.0, "{:?}: {e}", m.method);
+    }
     // configs.csv: every configuration has every method; counts within the pixel totals.
     let rows = csv_rows(&first.join("configs.csv"));
     assert_eq!(rows.len(), c.configs * c.methods.len());

@@ -15,6 +15,7 @@
 //!    truth. One bias policy ([`ShadowBias`]'s
 //!    default) serves every method.
 
+mod coverage;
 mod finish;
 pub mod framing;
 mod guard;
@@ -35,6 +36,7 @@ use glam::{DVec3, UVec2};
 
 use crate::mesh::{LoadReport, RayCaster, Scene, SceneOptions, ShadowMasks};
 use crate::optimize::{OptimizeOptions, SearchStrategy};
+use crate::render::subpixel::AaSamples;
 use crate::render::{
     Frame, LoopError, LoopOptions, LoopPolicy, LoopView, RenderError, Renderer, RendererOptions, ShadowBias,
     ShadowFaces, ShadowLookup, ShadowLoop, SpsmOptions,
@@ -43,6 +45,7 @@ use crate::{
     Camera, Light, LightMatrix, LixelError, Method, Parameterization, PsmOptions, ShadowMapSize, ShadowProblem,
 };
 
+pub use coverage::{facet_reference, Coverage, VisibilityError};
 pub use identity::{Identity, RESULT_NEUTRAL_SETTINGS};
 pub use images::error_overlay;
 pub use merge::{merge, MergeOptions};
@@ -261,6 +264,12 @@ pub struct ExperimentConfig {
     pub equivalence_configs: usize,
     /// Focused map resolutions tried for the equivalence.
     pub equivalence_ladder: Vec<u32>,
+    /// Sub-samples per pixel of the coverage truth behind
+    /// `mean_visibility_error` (8, 16 or 32; 0: off, the default but for the
+    /// quick preset: it costs 15-25 times the centre-sample truth). Needs the
+    /// ray-cast truth. Runs from before the field read as 0.
+    #[serde(default)]
+    pub coverage_samples: u32,
     /// Run only the configurations `k` with `k mod count = index`; the
     /// report goes to `out/shard-I-of-N` (see [`Shard`]).
     pub shard: Option<Shard>,
@@ -307,6 +316,7 @@ impl ExperimentConfig {
             max_optimize_frames: 12,
             equivalence_configs: 10,
             equivalence_ladder: vec![400, 500, 640, 800, 1000, 1250, 1600, 2000, 2500, 3200, 4000],
+            coverage_samples: 0,
             shard: None,
             out: PathBuf::from("report"),
             resume: false,
@@ -323,6 +333,7 @@ impl ExperimentConfig {
                 max_optimize_frames: 6,
                 equivalence_configs: 2,
                 equivalence_ladder: vec![256, 512, 1024],
+                coverage_samples: 32,
                 ..base
             },
             Preset::Paper => Self {
@@ -541,6 +552,8 @@ pub struct MethodResult {
     pub matrix: Option<LightMatrix>,
     /// Counts against the truth.
     pub counts: Option<Counts>,
+    /// Visibility error against the coverage truth (when it ran).
+    pub visibility: Option<VisibilityError>,
     /// Frames the scene-optimized loop took (1 for the others).
     pub frames: usize,
     /// Fallback or error text.
@@ -624,6 +637,12 @@ impl<'a> Runner<'a> {
     ) -> Result<Self, ExperimentError> {
         if config.configs == 0 || config.screen == 0 || config.map == 0 || config.methods.is_empty() {
             return Err(ExperimentError::Config("configs, screen, map and methods must be non-empty".into()));
+        }
+        if config.coverage_samples != 0 && AaSamples::from_count(config.coverage_samples).is_none() {
+            return Err(ExperimentError::Config(format!(
+                "coverage samples must be 0 (off), 8, 16 or 32, not {}",
+                config.coverage_samples
+            )));
         }
         let scene = load_scene(&config.scene)?;
         let camera = camera_for(config, &scene)?;
@@ -784,6 +803,12 @@ impl<'a> Runner<'a> {
             }
             _ => None,
         };
+        // The coverage truth goes with the ray-cast one (same rays, same pixels).
+        let samples = AaSamples::from_count(self.config.coverage_samples);
+        let coverage = match (&ray, &self.caster, samples) {
+            (Some(centre), Some(caster), Some(_)) => Some(Coverage::trace(caster, &self.camera, &light, centre)),
+            _ => None,
+        };
         let truth = ray.or(focused_truth).ok_or_else(|| ExperimentError::Config("no ground truth".into()))?;
         // What a depth readback supplies to PSM: the nearest visible depth.
         let nearest = nearest_view_depth(&self.camera, &truth);
@@ -793,10 +818,18 @@ impl<'a> Runner<'a> {
             let result = match self.matrix(method, &problem, nearest) {
                 Ok((m, frames, note)) => {
                     let masks = self.masks_with(&m, method.lookup())?;
-                    MethodResult { matrix: Some(m), counts: Some(Counts::compare(&masks, &truth)), frames, note }
+                    let visibility =
+                        coverage.as_ref().zip(samples).map(|(c, s)| VisibilityError::of_masks(&masks, &truth, c, s));
+                    MethodResult {
+                        matrix: Some(m),
+                        counts: Some(Counts::compare(&masks, &truth)),
+                        visibility,
+                        frames,
+                        note,
+                    }
                 }
                 Err(ExperimentError::Solver(e)) => {
-                    MethodResult { matrix: None, counts: None, frames: 0, note: e.to_string() }
+                    MethodResult { matrix: None, counts: None, visibility: None, frames: 0, note: e.to_string() }
                 }
                 Err(e) => return Err(e),
             };

@@ -209,6 +209,7 @@ mod tests {
             false_lit: Some(0),
             frames: 1,
             truth: None,
+            visibility_error: None,
             note: String::new(),
         }
     }

@@ -33,6 +33,9 @@ pub struct MethodSummary {
     pub percent_more_than_optimized: Option<f64>,
     /// Mean frames to settle (scene-optimized methods).
     pub mean_frames: f64,
+    /// Mean absolute visibility error per counted pixel against the
+    /// coverage truth, pooled over the configurations that have it.
+    pub mean_visibility_error: Option<f64>,
 }
 
 /// The whole run in numbers.
@@ -101,6 +104,11 @@ pub(super) fn summarize(
             let median = if sorted.is_empty() { f64::NAN } else { sorted[sorted.len() / 2] as f64 };
             let frames: Vec<u64> = rows.iter().filter(|r| r.method == m).map(|r| r.frames as u64).collect();
             let failures = rows.iter().filter(|r| r.method == m && r.misclassified.is_none()).count();
+            let (error, pixels) = rows
+                .iter()
+                .filter(|r| r.method == m)
+                .filter_map(|r| Some((r.visibility_error?, r.counted?)))
+                .fold((0.0, 0u64), |(e, n), (re, rn)| (e + re, n + rn));
             MethodSummary {
                 method: m,
                 configs: values.len(),
@@ -113,6 +121,7 @@ pub(super) fn summarize(
                     .contains(&MethodKind::Optimized)
                     .then(|| 100.0 * (mean(&values) / optimized_mean - 1.0)),
                 mean_frames: mean(&frames),
+                mean_visibility_error: (pixels > 0).then(|| error / pixels as f64),
             }
         })
         .collect();
@@ -167,12 +176,12 @@ pub(super) fn summarize(
 /// `summary.csv`'s text.
 fn summary_csv(summary: &Summary) -> String {
     let mut csv = String::from(
-        "method,configs,mean_misclassified,total_misclassified,percent_more_than_optimized,median_misclassified,failures,mean_frames\n",
+        "method,configs,mean_misclassified,total_misclassified,percent_more_than_optimized,median_misclassified,failures,mean_frames,mean_visibility_error\n",
     );
     for m in &summary.methods {
         let _ = writeln!(
             csv,
-            "{},{},{:.3},{},{},{:.1},{},{:.2}",
+            "{},{},{:.3},{},{},{:.1},{},{:.2},{}",
             m.method.name(),
             m.configs,
             m.mean,
@@ -180,7 +189,8 @@ fn summary_csv(summary: &Summary) -> String {
             m.percent_more_than_optimized.map(|p| format!("{p:.2}")).unwrap_or_default(),
             m.median,
             m.failures,
-            m.mean_frames
+            m.mean_frames,
+            m.mean_visibility_error.map(|v| format!("{v:.5}")).unwrap_or_default()
         );
     }
     csv
@@ -279,13 +289,15 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
     for (m, means) in &summary.worst {
         let _ = writeln!(md, "| worst 10% of {} | {} |", m.name(), cells(means));
     }
-    let _ =
-        writeln!(md, "\n| method | configs | mean | median | total | % more than optimized | failures | mean frames |");
-    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        md,
+        "\n| method | configs | mean | median | total | % more than optimized | failures | mean frames | mean visibility error |"
+    );
+    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for m in &summary.methods {
         let _ = writeln!(
             md,
-            "| {} | {} | {:.1} | {:.0} | {} | {} | {} | {:.2} |",
+            "| {} | {} | {:.1} | {:.0} | {} | {} | {} | {:.2} | {} |",
             m.method.name(),
             m.configs,
             m.mean,
@@ -293,7 +305,15 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
             m.total,
             m.percent_more_than_optimized.map(|p| format!("{p:+.1}%")).unwrap_or_else(|| "-".into()),
             m.failures,
-            m.mean_frames
+            m.mean_frames,
+            m.mean_visibility_error.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into())
+        );
+    }
+    if summary.methods.iter().any(|m| m.mean_visibility_error.is_some()) {
+        let _ = writeln!(
+            md,
+            "\nMean visibility error: mean over counted pixels of |method's visibility − true share of the pixel's {} ray-cast sub-samples the light reaches| (a standard lookup's visibility is 0 or 1).",
+            config.coverage_samples
         );
     }
     if let Some(a) = summary.truth_agreement {

@@ -13,7 +13,7 @@ use super::{ConfigOutcome, ExperimentConfig, ExperimentError, MethodKind};
 use crate::{Fallback, Light};
 
 pub(super) const CONFIGS_HEADER: &str =
-    "config,method,light_x,light_y,light_z,counted,misclassified,false_shadow,false_lit,frames,truth_disagreement,truth_compared,note";
+    "config,method,light_x,light_y,light_z,counted,misclassified,false_shadow,false_lit,frames,truth_disagreement,truth_compared,visibility_error_sum,note";
 
 /// One row of `configs.csv`.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,6 +36,9 @@ pub struct ConfigRow {
     pub frames: usize,
     /// Pixels where the two truths disagree, and pixels compared (when both ran).
     pub truth: Option<(u64, u64)>,
+    /// Summed absolute visibility error over the counted pixels, against the
+    /// coverage truth (when it ran; rows written before it existed have none).
+    pub visibility_error: Option<f64>,
     /// Fallback (a stable word, see [`fallback_note`]) or error.
     pub note: String,
 }
@@ -65,7 +68,7 @@ impl ConfigRow {
         let [x, y, z] = self.light;
         let note = self.note.replace([',', '\n', '"'], ";");
         format!(
-            "{},{},{x:.6},{y:.6},{z:.6},{},{},{},{},{},{},{},{note}",
+            "{},{},{x:.6},{y:.6},{z:.6},{},{},{},{},{},{},{},{},{note}",
             self.config,
             self.method.name(),
             opt(self.counted),
@@ -75,14 +78,19 @@ impl ConfigRow {
             self.frames,
             opt(self.truth.map(|t| t.0)),
             opt(self.truth.map(|t| t.1)),
+            // Enough digits that a resumed or merged run sums to the same figure.
+            self.visibility_error.map(|v| format!("{v:.6}")).unwrap_or_default(),
         )
     }
 
     pub(super) fn parse(line: &str) -> Option<Self> {
-        let f: Vec<&str> = line.splitn(13, ',').collect();
-        if f.len() != 13 {
-            return None;
-        }
+        // 14 fields; 13 in files from before `visibility_error_sum` (notes never hold a comma).
+        let mut f: Vec<&str> = line.splitn(14, ',').collect();
+        let visibility = match f.len() {
+            14 => f.remove(12),
+            13 => "",
+            _ => return None,
+        };
         let num = |s: &str| if s.is_empty() { Some(None) } else { s.parse().ok().map(Some) };
         let truth = match (num(f[10])?, num(f[11])?) {
             (Some(a), Some(b)) => Some((a, b)),
@@ -98,6 +106,7 @@ impl ConfigRow {
             false_lit: num(f[8])?,
             frames: f[9].parse().ok()?,
             truth,
+            visibility_error: if visibility.is_empty() { None } else { Some(visibility.parse().ok()?) },
             note: f[12].to_string(),
         })
     }
@@ -189,6 +198,9 @@ impl ConfigWriter {
                 false_lit: result.counts.map(|c| c.false_lit),
                 frames: result.frames,
                 truth: outcome.truth_disagreement,
+                // Rounded as configs.csv stores it, so a summary from these rows
+                // equals one from the file (resume, merge) to the last digit.
+                visibility_error: result.visibility.map(|v| format!("{:.6}", v.sum).parse().unwrap_or(v.sum)),
                 note: result.note.clone(),
             })
             .collect();

@@ -46,6 +46,7 @@ mod output;
 mod passes;
 pub mod readback;
 pub mod spsm;
+pub mod subpixel;
 mod timing;
 mod uniforms;
 
