@@ -18,7 +18,9 @@ use std::path::PathBuf;
 
 use glam::UVec2;
 use lixel::mesh::RayCaster;
-use lixel::render::{masks_image, shadow_map_image, Frame, Renderer, RendererOptions};
+use lixel::render::{
+    masks_image, shadow_map_image, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop,
+};
 use lixel::{LightMatrix, Parameterization, ShadowMapSize, ShadowProblem};
 
 fn main() {
@@ -57,14 +59,26 @@ fn run() -> Result<(), String> {
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
     // Scene-optimized: the frame loop at this fixed view, from the focused
     // map, until the optimizer keeps its previous matrix (at most 12 frames).
-    let optimized =
-        lixel::experiment::settle(&mut renderer, &problem, Default::default(), 12).map_err(|e| e.to_string())?.matrix;
-    methods.push(("scene-optimized", optimized));
+    let view = LoopView {
+        camera: &camera,
+        lights: std::slice::from_ref(&light),
+        bounds: scene.bounds(),
+        map: problem.map_size(),
+    };
+    let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions::default()).map_err(|e| e.to_string())?;
+    let optimized = shadows.settle(&mut renderer, &view, 12).map_err(|e| e.to_string())?.matrices[0];
+    methods.push(("optimized", optimized));
     let (mut views, mut maps, mut masks) = (Vec::new(), Vec::new(), Vec::new());
     println!("{:<16} {:>14} {:>10}", "method", "misclassified", "fallback");
     for (name, matrix) in &methods {
         renderer
-            .render(&Frame { camera: &camera, lights: std::slice::from_ref(matrix), masks: true, analysis: None })
+            .render(&Frame {
+                camera: &camera,
+                lights: std::slice::from_ref(matrix),
+                masks: true,
+                analysis: None,
+                lookup: Default::default(),
+            })
             .map_err(|e| e.to_string())?;
         let view = renderer.read_color().map_err(|e| e.to_string())?;
         let gpu_masks = renderer.read_masks().map_err(|e| e.to_string())?;
@@ -72,7 +86,7 @@ fn run() -> Result<(), String> {
         let wrong = gpu_masks.misclassified(&truth, 0).unwrap_or(0);
         println!("{name:<16} {wrong:>14} {:>10}", matrix.fallback.map_or("-".to_string(), |f| format!("{f:?}")));
         view.save(out.join(format!("{name}.png"))).map_err(|e| e.to_string())?;
-        let map_image = shadow_map_image(&shadow_map, matrix.reverse_depth_test);
+        let map_image = shadow_map_image(&shadow_map);
         // Shadow maps are shown at the view's size so the montage lines up.
         maps.push(image::imageops::resize(&map_image, size, size, image::imageops::FilterType::Nearest));
         masks.push(masks_image(&gpu_masks));

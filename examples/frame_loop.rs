@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! cargo run --release --example frame_loop -- [--preset tiny|small|default] [--obj file.obj]
-//!     [--method scene-optimized|focused|lispsm] [--lights 2] [--map 1024] [--size 750]
+//!     [--method optimized|focused|lispsm] [--lights 2] [--map 1024] [--size 750]
 //!     [--frames 60] [--png-every 10] [--in-flight 2] [--out target/frame_loop]
 //! ```
 
@@ -31,7 +31,8 @@ fn run() -> Result<(), String> {
     let out = PathBuf::from(args.value("--out").unwrap_or("target/frame_loop"));
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     let config = support::LoopConfig {
-        policy: support::Policy::parse(args.value("--method").unwrap_or("scene-optimized"))?,
+        method: args.value("--method").unwrap_or("optimized").to_owned(),
+        policy: support::parse_policy(args.value("--method").unwrap_or("optimized"))?,
         lights: args.parse("--lights", 2)?,
         map: args.parse("--map", 1024)?,
         size: args.parse("--size", 750)?,
@@ -60,7 +61,7 @@ fn run() -> Result<(), String> {
     println!(
         "{} frames, {} ({} lights, {}² maps, {}² screen)",
         records.len(),
-        config.policy.name(),
+        config.method,
         config.lights,
         config.map,
         config.size

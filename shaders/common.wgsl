@@ -1,5 +1,8 @@
 // Shared declarations of the camera and analysis passes: prepended to
-// camera.wgsl and analysis.wgsl by the renderer (WGSL has no includes).
+// camera.wgsl and analysis.wgsl by the renderer (WGSL has no includes),
+// together with the shadow lookup's own file (`shaders/lookup_*.wgsl`, chosen by
+// `ShadowLookup`), which binds the maps in group 1 and defines
+// `fn in_shadow(light: Light, world: vec3<f32>) -> bool`.
 //
 // Conventions (wgpu's): right-handed world, clip depth in [0, 1], NDC y up,
 // framebuffer and texture row 0 at the top.
@@ -51,9 +54,6 @@ struct Lights {
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var<uniform> lights: Lights;
-// Depth textures are bound as unfilterable float textures: naga cannot
-// translate `textureLoad` from a depth texture to GLSL (the GL backend).
-@group(0) @binding(2) var shadow_maps: texture_2d_array<f32>;
 
 struct VertexInput {
     @location(0) position: vec3<f32>,
@@ -88,31 +88,6 @@ fn to_light(light: Light, world: vec3<f32>) -> vec3<f32> {
 fn in_cone(light: Light, world: vec3<f32>) -> bool {
     let to_world = world - light.position.xyz;
     return light.spot.w < -1.0 || dot(light.spot.xyz, to_world) >= light.spot.w * length(to_world);
-}
-
-// Hard shadow test of `world` against the light's map. Points outside the
-// map, or behind the light's image plane, count as lit.
-fn in_shadow(light: Light, world: vec3<f32>) -> bool {
-    let clip = light.clip_from_world * vec4<f32>(world, 1.0);
-    if clip.w <= 0.0 {
-        return false;
-    }
-    let ndc = clip.xyz / clip.w;
-    if any(abs(ndc.xy) > vec2<f32>(1.0)) {
-        return false;
-    }
-    // NDC to texels. x: [-1, 1] -> [0, width). y: NDC y is up but texture
-    // row 0 is at the top, so flip. Texel k covers [k, k + 1); the shadow
-    // pass rasterized it at its centre k + 0.5, so `floor` picks the texel
-    // whose sample is nearest in the sense of the rasterizer's coverage.
-    let texel = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size;
-    let size = vec2<i32>(light.map_size);
-    let coords = clamp(vec2<i32>(floor(texel)), vec2<i32>(0), size - vec2<i32>(1));
-    let stored = textureLoad(shadow_maps, coords, light.layer, 0).x;
-    // Linear light depth, as the shadow pass stored it (see shadow.wgsl);
-    // receivers beyond the far end compare as at it.
-    let depth = clamp(linear_light_depth(light.position, light.depth.xy, world), 0.0, 1.0);
-    return stored < depth;
 }
 
 struct Shading {

@@ -30,15 +30,18 @@
 //! [`LightMatrix::clip_from_world_f32`] converts for upload.
 //!
 //! ## Features
-//! `render` (default) adds the wgpu renderer; without it the crate is the
-//! solver alone (glam, thiserror, robust).
+//! `render` (default) adds the wgpu renderer and its frame loop
+//! ([`render::ShadowLoop`]); without it the crate is the solver alone (glam,
+//! thiserror, robust, argmin). `cli` (default) adds the `lixel` binary and
+//! the experiment harness behind it (`lixel::experiment`, with clap and
+//! indicatif); an engine needs only `render`.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod camera;
 mod error;
-#[cfg(feature = "render")]
+#[cfg(feature = "cli")]
 pub mod experiment;
 pub mod fit;
 pub mod geometry;

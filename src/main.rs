@@ -38,16 +38,6 @@ enum Command {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum PresetArg {
-    /// Small enough for CI (seconds to a minute).
-    Quick,
-    /// The main job: a few minutes on a 2-core machine.
-    Default,
-    /// The paper's setting: 1.1M triangles, 500 lights, 750² screen, 400² maps.
-    Paper,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
 enum UpArg {
     /// +y up (OBJ's usual convention, glTF's rule).
     Y,
@@ -55,32 +45,14 @@ enum UpArg {
     Z,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum LightArg {
-    /// Point lights on a distant hemisphere (the paper's setting).
-    Point,
-    /// Directional (sun-like) lights from the hemisphere.
-    Directional,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum TruthArg {
-    /// Exact ray casting against every triangle.
-    Raytrace,
-    /// The paper's focused 4000x4000 map.
-    Focused4000,
-    /// Both; counts use ray casting, the report gives their agreement.
-    Both,
-}
-
 #[derive(clap::Args)]
 struct ExperimentArgs {
     /// Starting point for every setting below.
     #[arg(long, value_enum, default_value = "default")]
-    preset: PresetArg,
+    preset: Preset,
     /// Light kind.
     #[arg(long, value_enum)]
-    light: Option<LightArg>,
+    light: Option<LightKind>,
     /// A scene file (.obj, .gltf, .glb) instead of the built-in scene; the
     /// default camera frames it and a floor under it receives its shadows.
     #[arg(long)]
@@ -124,7 +96,7 @@ struct ExperimentArgs {
     methods: Option<Vec<String>>,
     /// Ground truth.
     #[arg(long, value_enum)]
-    truth: Option<TruthArg>,
+    truth: Option<Truth>,
     /// Configurations for the resolution equivalence (0 turns it off).
     #[arg(long)]
     equivalence: Option<usize>,
@@ -196,17 +168,8 @@ fn parse_vec3(s: &str) -> Result<DVec3, String> {
 }
 
 fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> {
-    let mut c = ExperimentConfig::preset(match args.preset {
-        PresetArg::Quick => Preset::Quick,
-        PresetArg::Default => Preset::Default,
-        PresetArg::Paper => Preset::Paper,
-    });
-    if let Some(l) = args.light {
-        c.light = match l {
-            LightArg::Point => LightKind::Point,
-            LightArg::Directional => LightKind::Directional,
-        };
-    }
+    let mut c = ExperimentConfig::preset(args.preset);
+    c.light = args.light.unwrap_or(c.light);
     if let Some(path) = &args.scene {
         let up = match args.up {
             UpArg::Y => UpAxis::Y,
@@ -231,11 +194,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
             .collect::<Result<_, _>>()?;
     }
     if let Some(t) = args.truth {
-        c.truth = match t {
-            TruthArg::Raytrace => Truth::RayCast,
-            TruthArg::Focused4000 => Truth::Focused4000,
-            TruthArg::Both => Truth::Both,
-        };
+        c.truth = t;
     }
     c.equivalence_configs = args.equivalence.unwrap_or(c.equivalence_configs);
     c.out.clone_from(&args.out);

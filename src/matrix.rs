@@ -24,8 +24,9 @@ pub enum Method {
     LiSpsm,
     /// Perfect sampling on one receiver plane (Chong & Gortler 2004).
     PlaneOptimal,
-    /// Optimized from read-back samples (Chong & Gortler 2006).
-    SceneOptimized,
+    /// Scene-optimized: moved from read-back samples of the scene
+    /// (Chong & Gortler 2006).
+    Optimized,
 }
 
 impl Method {
@@ -38,7 +39,7 @@ impl Method {
             Self::Psm => "psm",
             Self::LiSpsm => "lispsm",
             Self::PlaneOptimal => "plane-optimal",
-            Self::SceneOptimized => "scene-optimized",
+            Self::Optimized => "optimized",
         }
     }
 }
@@ -157,11 +158,6 @@ pub struct LightMatrix {
     pub light_distance: LightDistance,
     /// The shadow map's size in texels.
     pub map_size: ShadowMapSize,
-    /// Render and compare with a reversed depth test (greater-is-closer).
-    /// lixel's own builders always normalise depth so that it grows away from
-    /// the light, so this is `false` for every built-in method (PSM's
-    /// "inverted" light included: see the crate docs).
-    pub reverse_depth_test: bool,
     /// Casters closer to the light than the near plane exist: render with
     /// unclipped depth (`wgpu::Features::DEPTH_CLIP_CONTROL`,
     /// `unclipped_depth: true`) so that they rasterize, clamped to depth 0.
@@ -364,7 +360,6 @@ impl Placement<'_> {
             depth,
             light_distance,
             map_size: self.map,
-            reverse_depth_test: false,
             needs_unclipped_depth,
             method: self.method,
             fallback: self.fallback,

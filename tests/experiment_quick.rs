@@ -1,6 +1,6 @@
 //! `lixel experiment --preset quick` end to end: the report files, their
 //! invariants, determinism and `--resume`.
-#![cfg(feature = "render")]
+#![cfg(feature = "cli")]
 
 #[path = "render_common/mod.rs"]
 mod render_common;

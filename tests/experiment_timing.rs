@@ -2,7 +2,7 @@
 //! rounds, the scene-optimized pipeline really analyses and optimizes, and the
 //! report holds the table, the pooled ratios and the breakdown. (What the
 //! ratios are is measured by `lixel experiment --timing`, not asserted.)
-#![cfg(feature = "render")]
+#![cfg(feature = "cli")]
 
 #[path = "render_common/mod.rs"]
 mod render_common;

@@ -207,7 +207,7 @@ fn optimized_matrices_keep_every_relevant_sample_over_synthetic_scenes() {
                 if let Err(e) = check_covers(&result.matrix, &relevant_world(&camera, &rb, 1), &format!("#{i}")) {
                     failures.push(format!("{e}\n  {light:?} eye {eye} look {look} report {r:?}"));
                 }
-                if result.matrix.method != Method::SceneOptimized && prev.is_none() {
+                if result.matrix.method != Method::Optimized && prev.is_none() {
                     failures.push(format!("#{i}: method {:?}", result.matrix.method));
                 }
             }

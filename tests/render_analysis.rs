@@ -24,7 +24,13 @@ fn analysis(
     let options = RendererOptions { analysis_size: (180, 180), analysis_source: source, ..Default::default() };
     let mut renderer = Renderer::new(device, queue, scene, options).unwrap();
     let matrices = matrices(scene, camera, lights, 1024, &Parameterization::Focused);
-    let frame = Frame { camera, lights: &matrices, masks: false, analysis: Some(AnalysisRequest::default()) };
+    let frame = Frame {
+        camera,
+        lights: &matrices,
+        masks: false,
+        analysis: Some(AnalysisRequest::default()),
+        lookup: Default::default(),
+    };
     renderer.render(&frame).unwrap();
     renderer.wait_idle().unwrap();
     renderer.try_take_analysis().expect("the device is idle: the readback is there")
@@ -146,7 +152,13 @@ fn analysis_reuses_the_frames_maps_where_the_matrices_agree() {
     let mut run = |frame_lights: &[lixel::LightMatrix], analysis_lights: Option<&[lixel::LightMatrix]>| {
         let request = AnalysisRequest { lights: analysis_lights, tag: 0 };
         let report = renderer
-            .render(&Frame { camera: &camera, lights: frame_lights, masks: false, analysis: Some(request) })
+            .render(&Frame {
+                camera: &camera,
+                lights: frame_lights,
+                masks: false,
+                analysis: Some(request),
+                lookup: Default::default(),
+            })
             .unwrap();
         renderer.wait_idle().unwrap();
         (report.shadow_passes, renderer.try_take_analysis().unwrap())

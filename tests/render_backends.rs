@@ -36,7 +36,14 @@ fn vulkan_and_gl_masks_agree() {
     for parameterization in Parameterization::ALL_DEFAULT {
         let matrices = render_common::matrices(&scene, &camera, &lights, 512, &parameterization);
         let masks = |r: &mut Renderer| {
-            r.render(&Frame { camera: &camera, lights: &matrices, masks: true, analysis: None }).unwrap();
+            r.render(&Frame {
+                camera: &camera,
+                lights: &matrices,
+                masks: true,
+                analysis: None,
+                lookup: Default::default(),
+            })
+            .unwrap();
             r.read_masks().unwrap()
         };
         let (ma, mb) = (masks(&mut a), masks(&mut b));

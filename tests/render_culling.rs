@@ -48,7 +48,8 @@ fn culling_changes_nothing_but_the_work() {
                     .ok()
             })
             .collect();
-        let frame = Frame { camera: &camera, lights: &matrices, masks: true, analysis: None };
+        let frame =
+            Frame { camera: &camera, lights: &matrices, masks: true, analysis: None, lookup: Default::default() };
         let a = culled.render(&frame).unwrap();
         let b = everything.render(&frame).unwrap();
         assert_eq!(b.shadow_triangles, total * matrices.len() as u64);

@@ -20,16 +20,13 @@ fn renders_match_reference_images() {
     let camera = walkthrough_camera(128);
     let lights = matrices(&scene, &camera, &test_lights(), 256, &Parameterization::Focused);
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
-    renderer.render(&Frame { camera: &camera, lights: &lights, masks: true, analysis: None }).unwrap();
+    renderer
+        .render(&Frame { camera: &camera, lights: &lights, masks: true, analysis: None, lookup: Default::default() })
+        .unwrap();
 
     assert_matches_reference("camera-focused", &renderer.read_color().unwrap(), CHANNEL_TOLERANCE, MAX_DIFFERING);
     assert_matches_reference("masks-focused", &masks_image(&renderer.read_masks().unwrap()), 0, MAX_DIFFERING);
     let map = renderer.read_shadow_map(0).unwrap();
     assert_eq!((map.width, map.height), (256, 256));
-    assert_matches_reference(
-        "shadow-map-focused-sun",
-        &shadow_map_image(&map, false),
-        CHANNEL_TOLERANCE,
-        MAX_DIFFERING,
-    );
+    assert_matches_reference("shadow-map-focused-sun", &shadow_map_image(&map), CHANNEL_TOLERANCE, MAX_DIFFERING);
 }

@@ -23,7 +23,15 @@ fn shadow_bits_agree_with_ray_cast() {
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
     for parameterization in [Parameterization::Focused, Parameterization::LiSpsm(Default::default())] {
         let matrices = matrices(&scene, &camera, &lights, 1024, &parameterization);
-        renderer.render(&Frame { camera: &camera, lights: &matrices, masks: true, analysis: None }).unwrap();
+        renderer
+            .render(&Frame {
+                camera: &camera,
+                lights: &matrices,
+                masks: true,
+                analysis: None,
+                lookup: Default::default(),
+            })
+            .unwrap();
         let gpu = renderer.read_masks().unwrap();
         for light in 0..lights.len() as u32 {
             let agreement = truth.agreement_away_from_boundaries(&gpu, light, 1);
@@ -52,7 +60,8 @@ fn spot_cones_bound_the_lit_region() {
     let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
     let matrices = matrices(&scene, &camera, &[spot, point], 1024, &Parameterization::Focused);
     let analysis = lixel::render::AnalysisRequest::default();
-    let frame = Frame { camera: &camera, lights: &matrices, masks: true, analysis: Some(analysis) };
+    let frame =
+        Frame { camera: &camera, lights: &matrices, masks: true, analysis: Some(analysis), lookup: Default::default() };
     renderer.render(&frame).unwrap();
     renderer.wait_idle().unwrap();
     let gpu = renderer.read_masks().unwrap();

@@ -25,13 +25,26 @@ fn frames_keep_submitting_while_a_readback_is_pending() {
     let camera = walkthrough_camera(128);
     let lights = matrices(&scene, &camera, &test_lights(), 512, &Parameterization::Focused);
     let first = renderer
-        .render(&Frame { camera: &camera, lights: &lights, masks: false, analysis: Some(AnalysisRequest::default()) })
+        .render(&Frame {
+            camera: &camera,
+            lights: &lights,
+            masks: false,
+            analysis: Some(AnalysisRequest::default()),
+            lookup: Default::default(),
+        })
         .unwrap();
     assert!(first.analysis_queued);
     for expected in 1..6 {
         assert_eq!(renderer.readback_ring().in_flight(), 1, "the readback is still pending (not taken)");
-        let report =
-            renderer.render(&Frame { camera: &camera, lights: &lights, masks: false, analysis: None }).unwrap();
+        let report = renderer
+            .render(&Frame {
+                camera: &camera,
+                lights: &lights,
+                masks: false,
+                analysis: None,
+                lookup: Default::default(),
+            })
+            .unwrap();
         assert_eq!(report.frame, expected);
     }
     renderer.wait_idle().unwrap();
@@ -60,7 +73,13 @@ fn a_full_ring_skips_analysis_instead_of_waiting() {
     let scene = tiny_scene();
     let camera = walkthrough_camera(128);
     let lights = matrices(&scene, &camera, &test_lights(), 256, &Parameterization::Focused);
-    let frame = Frame { camera: &camera, lights: &lights, masks: false, analysis: Some(AnalysisRequest::default()) };
+    let frame = Frame {
+        camera: &camera,
+        lights: &lights,
+        masks: false,
+        analysis: Some(AnalysisRequest::default()),
+        lookup: Default::default(),
+    };
     let reports: Vec<_> = (0..4).map(|_| renderer.render(&frame).unwrap()).collect();
     assert!(reports[0].analysis_queued && reports[1].analysis_queued);
     assert!(reports[2].analysis_skipped && reports[3].analysis_skipped);
@@ -92,8 +111,13 @@ fn a_missing_readback_keeps_the_previous_matrices() {
         |s: &ShadowScheduler| -> Vec<LightMatrix> { (0..lights.len()).map(|i| *s.matrix(i).unwrap()).collect() };
     for _ in 0..9 {
         let lights_now = current(&scheduler);
-        let frame =
-            Frame { camera: &camera, lights: &lights_now, masks: false, analysis: Some(AnalysisRequest::default()) };
+        let frame = Frame {
+            camera: &camera,
+            lights: &lights_now,
+            masks: false,
+            analysis: Some(AnalysisRequest::default()),
+            lookup: Default::default(),
+        };
         renderer.render(&frame).unwrap();
         // The readback never arrives: nothing is taken, nothing updated.
         assert_eq!(current(&scheduler), focused);

@@ -139,40 +139,23 @@ pub fn montage(images: &[image::RgbaImage], columns: usize) -> image::RgbaImage 
     out
 }
 
-/// How the frame loop picks each light's matrix.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Policy {
-    /// Focused maps, solved every frame.
-    Focused,
-    /// LiSPSM maps, solved every frame.
-    LiSpsm,
-    /// The scene-optimized pipeline: analysis pass every 3 frames (every
-    /// 4th with standard maps), asynchronous readback, optimizer.
-    SceneOptimized,
-}
-
-impl Policy {
-    pub fn parse(name: &str) -> Result<Self, String> {
-        match name {
-            "focused" => Ok(Self::Focused),
-            "lispsm" => Ok(Self::LiSpsm),
-            "scene-optimized" | "optimized" => Ok(Self::SceneOptimized),
-            other => Err(format!("unknown method {other:?} (focused, lispsm, scene-optimized)")),
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Focused => "focused",
-            Self::LiSpsm => "lispsm",
-            Self::SceneOptimized => "scene-optimized",
-        }
+/// The frame loop's policy by name: `focused`, `lispsm` or `optimized`.
+pub fn parse_policy(name: &str) -> Result<lixel::render::LoopPolicy, String> {
+    use lixel::render::LoopPolicy;
+    use lixel::Parameterization;
+    match name {
+        "focused" => Ok(LoopPolicy::Fixed(Parameterization::Focused)),
+        "lispsm" => Ok(LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default()))),
+        "optimized" => Ok(LoopPolicy::Optimized),
+        other => Err(format!("unknown method {other:?} (focused, lispsm, optimized)")),
     }
 }
 
 /// Settings of one run of the frame loop.
 pub struct LoopConfig {
-    pub policy: Policy,
+    /// Its name, as given to [`parse_policy`].
+    pub method: String,
+    pub policy: lixel::render::LoopPolicy,
     pub lights: usize,
     pub map: u32,
     pub size: u32,
@@ -245,17 +228,15 @@ pub fn run_loop(
     scene: &Scene,
     config: &LoopConfig,
 ) -> Result<Vec<FrameRecord>, String> {
-    use lixel::optimize::{Optimizer, ScheduleOptions, ShadowScheduler};
-    use lixel::render::{AnalysisRequest, Frame};
-    use lixel::{Parameterization, ShadowMapSize, ShadowProblem};
+    use lixel::render::{LoopOptions, LoopView, ShadowLoop};
+    use lixel::ShadowMapSize;
     use std::time::Instant;
 
     let bounds = scene.bounds();
-    // Per-light matrices and the paper's cadence (analysis every 3 frames,
-    // each light's focused lookup every 5th pass), independent of the renderer.
-    let mut scheduler =
-        ShadowScheduler::new(config.lights, ScheduleOptions::default(), Optimizer::new(Default::default()))
-            .map_err(|e| e.to_string())?;
+    // Per-light matrices, the paper's cadence (analysis every 3 frames, each
+    // light's focused lookup every 5th pass), readback and optimizer.
+    let mut shadows =
+        ShadowLoop::new(config.policy.clone(), config.lights, LoopOptions::default()).map_err(|e| e.to_string())?;
     let mut records: Vec<FrameRecord> = Vec::with_capacity(config.frames as usize);
     let mut submissions = std::collections::VecDeque::new();
     let mut previous_start: Option<Instant> = None;
@@ -270,71 +251,19 @@ pub fn run_loop(
         let t = n as f64 / config.frames_per_loop as f64;
         let camera = walk_camera(t, UVec2::splat(config.size));
         let lights = moving_lights(0.37 * t, config.lights);
-        let map = ShadowMapSize::square(config.map);
-        let solve_at = |size: ShadowMapSize, p: &Parameterization| -> Result<Vec<lixel::LightMatrix>, String> {
-            lights
-                .iter()
-                .map(|l| ShadowProblem::new(camera, *l, bounds, size).and_then(|problem| problem.solve(p)))
-                .collect::<Result<_, _>>()
-                .map_err(|e| e.to_string())
-        };
-        let solve = |p: &Parameterization| solve_at(map, p);
-
-        let solve_start = Instant::now();
-        let (matrices, standard, analysis_plan) = match config.policy {
-            Policy::Focused => (solve(&Parameterization::Focused)?, None, None),
-            Policy::LiSpsm => (solve(&Parameterization::LiSpsm(Default::default()))?, None, None),
-            Policy::SceneOptimized => {
-                // The focused matrices are the starting point (and the
-                // fallback of a light the optimizer has not reached yet).
-                let focused = solve(&Parameterization::Focused)?;
-                let readback = renderer.try_take_analysis();
-                if let Some(r) = &readback {
-                    record.readback = Some((
-                        r.frame,
-                        r.latency.frames,
-                        r.latency.ready.as_secs_f64() * 1e3,
-                        r.latency.taken.as_secs_f64() * 1e3,
-                    ));
-                    // The optimizer: samples of each light from the readback
-                    // (for the camera it was rendered with), optimized against
-                    // the light's current matrix; a failure keeps that matrix.
-                    for (light, samples) in r.samples_all(&lights, bounds, map).into_iter().enumerate() {
-                        let Ok(samples) = samples else { continue };
-                        if scheduler.update(light, &samples, n).is_ok() {
-                            record.matrices_updated += 1;
-                        }
-                    }
-                }
-                let current: Vec<_> =
-                    focused.iter().enumerate().map(|(i, f)| scheduler.matrix(i).copied().unwrap_or(*f)).collect();
-                // The periodic standard analysis: the lights whose turn it is
-                // are looked up in focused maps at the scheduler's reduced
-                // size; the others reuse the frame's maps.
-                let plan = scheduler.plan(n).analysis;
-                let standard = match plan {
-                    Some(plan) if plan.focused != 0 => {
-                        let small = solve_at(scheduler.focused_analysis_size(map), &Parameterization::Focused)?;
-                        Some(
-                            current
-                                .iter()
-                                .zip(small)
-                                .enumerate()
-                                .map(|(i, (&m, f))| if plan.is_focused(i) { f } else { m })
-                                .collect::<Vec<_>>(),
-                        )
-                    }
-                    _ => None,
-                };
-                (current, standard, plan)
-            }
-        };
-        record.solve_ms = solve_start.elapsed().as_secs_f64() * 1e3;
-
-        let analysis = analysis_plan.map(|plan| AnalysisRequest { lights: standard.as_deref(), tag: plan.focused });
-        let report = renderer
-            .render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis })
-            .map_err(|e| e.to_string())?;
+        let view = LoopView { camera: &camera, lights: &lights, bounds, map: ShadowMapSize::square(config.map) };
+        let frame = shadows.frame(renderer, &view).map_err(|e| e.to_string())?;
+        if let Some(r) = &frame.readback {
+            record.readback = Some((
+                r.frame,
+                r.latency.frames,
+                r.latency.ready.as_secs_f64() * 1e3,
+                r.latency.taken.as_secs_f64() * 1e3,
+            ));
+        }
+        record.matrices_updated = frame.optimized.count_ones() as usize;
+        record.solve_ms = (frame.optimize_time + frame.solve_time).as_secs_f64() * 1e3;
+        let report = frame.render;
         record.encode_ms = report.cpu_time.as_secs_f64() * 1e3;
         record.analysis_queued = report.analysis_queued;
         record.analysis_skipped = report.analysis_skipped;

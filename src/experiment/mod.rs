@@ -26,17 +26,21 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, UVec2};
 
 use crate::mesh::{LoadReport, RayCaster, Scene, SceneOptions, ShadowMasks};
-use crate::optimize::{OptimizeOptions, Optimizer, SampleOptions, SearchStrategy};
-use crate::render::{AnalysisRequest, Frame, RenderError, Renderer, RendererOptions, ShadowBias, ShadowFaces};
+use crate::optimize::{OptimizeOptions, SearchStrategy};
+use crate::render::{
+    Frame, LoopError, LoopOptions, LoopPolicy, LoopView, RenderError, Renderer, RendererOptions, ShadowBias,
+    ShadowFaces, ShadowLoop,
+};
 use crate::{
-    Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, Samples, ShadowMapSize, ShadowProblem,
+    Camera, Light, LightMatrix, LixelError, Method, Parameterization, PsmOptions, ShadowMapSize, ShadowProblem,
 };
 
 pub use images::error_overlay;
 pub use report::{markdown, ConfigRow, MethodSummary, Summary};
 pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
 
-/// A method of the experiment.
+/// A method of the experiment: one of the library's [`Method`]s, the
+/// scene-optimized one with either search.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum MethodKind {
     /// Uniform around all receivers.
@@ -67,17 +71,26 @@ impl MethodKind {
         Self::OptimizedArgmin,
     ];
 
-    /// Name used on the command line and in reports.
+    /// The library's method behind it.
+    #[must_use]
+    pub fn method(self) -> Method {
+        match self {
+            Self::Normal => Method::Normal,
+            Self::Focused => Method::Focused,
+            Self::LiSpsm => Method::LiSpsm,
+            Self::Psm => Method::Psm,
+            Self::PlaneOptimal => Method::PlaneOptimal,
+            Self::Optimized | Self::OptimizedArgmin => Method::Optimized,
+        }
+    }
+
+    /// Name used on the command line and in reports: the library's
+    /// [`Method::name`], with `-argmin` for the Nelder–Mead search.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
-            Self::Normal => "normal",
-            Self::Focused => "focused",
-            Self::LiSpsm => "lispsm",
-            Self::Psm => "psm",
-            Self::PlaneOptimal => "plane-optimal",
-            Self::Optimized => "optimized",
             Self::OptimizedArgmin => "optimized-argmin",
+            other => other.method().name(),
         }
     }
 
@@ -89,9 +102,10 @@ impl MethodKind {
 }
 
 /// Which ground truth the counts use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Truth {
     /// Exact ray casting (independent of every method). The default.
+    #[value(name = "raytrace")]
     RayCast,
     /// The paper's reference: a focused 4000x4000 map.
     Focused4000,
@@ -100,7 +114,7 @@ pub enum Truth {
 }
 
 /// Point lights on a distant hemisphere, or directional lights from it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum LightKind {
     /// Point lights (the paper's setting).
     Point,
@@ -167,7 +181,7 @@ pub struct ExperimentConfig {
 }
 
 /// Named presets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Preset {
     /// Small enough for CI (well under two minutes).
     Quick,
@@ -250,6 +264,15 @@ pub enum ExperimentError {
     /// The camera or a light is invalid.
     #[error("solver: {0}")]
     Solver(#[from] LixelError),
+}
+
+impl From<LoopError> for ExperimentError {
+    fn from(e: LoopError) -> Self {
+        match e {
+            LoopError::Render(e) => Self::Render(e),
+            LoopError::Solve(e) => Self::Solver(e),
+        }
+    }
 }
 
 /// Progress of a run, for a progress bar.
@@ -467,7 +490,13 @@ impl<'a> Runner<'a> {
     /// Renders the camera view with `matrix` (masks included) and waits for it.
     fn render_view(&mut self, matrix: &LightMatrix) -> Result<(), ExperimentError> {
         let lights = std::slice::from_ref(matrix);
-        let report = self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None })?;
+        let report = self.renderer.render(&Frame {
+            camera: &self.camera,
+            lights,
+            masks: true,
+            analysis: None,
+            lookup: Default::default(),
+        })?;
         Ok(self.renderer.wait_for(&report.submission)?)
     }
 
@@ -533,16 +562,24 @@ impl<'a> Runner<'a> {
         Ok((m, 1, note))
     }
 
-    /// The scene-optimized frame loop at this configuration (see [`settle`]).
+    /// The scene-optimized frame loop at this configuration, paused at its
+    /// view until it settles ([`ShadowLoop::settle`]).
     fn settle(
         &mut self,
         problem: &ShadowProblem,
         strategy: SearchStrategy,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
-        let options = OptimizeOptions { strategy, ..Default::default() };
-        let settled = settle(&mut self.renderer, problem, options, self.config.max_optimize_frames)?;
-        let note = settled.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
-        Ok((settled.matrix, settled.frames, note))
+        let optimize = OptimizeOptions { strategy, ..Default::default() };
+        let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() })?;
+        let view = LoopView {
+            camera: problem.camera(),
+            lights: std::slice::from_ref(problem.light()),
+            bounds: *problem.bounds(),
+            map: problem.map_size(),
+        };
+        let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
+        let note = settled.fallbacks[0].map(|f| format!("{f:?}")).unwrap_or_default();
+        Ok((settled.matrices[0], settled.frames, note))
     }
 
     /// Runs configuration `index`.
@@ -618,57 +655,6 @@ pub fn experiment_renderer_options() -> RendererOptions {
         bias: ShadowBias::default(),
         ..RendererOptions::default()
     }
-}
-
-/// The result of [`settle`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct Settled {
-    /// The matrix the loop settled on.
-    pub matrix: LightMatrix,
-    /// Frames (analysis passes) it took.
-    pub frames: usize,
-    /// The optimizer's last fallback, if any.
-    pub fallback: Option<crate::Fallback>,
-}
-
-/// The scene-optimized frame loop at a fixed view, as in a walkthrough that
-/// pauses: start from the focused map; each frame renders the analysis pass
-/// with the current matrix, reads it back and optimizes; stop when the
-/// optimizer keeps the previous matrix (no 20% median improvement), falls
-/// back, or after `max_frames`.
-///
-/// # Errors
-/// Renderer and solver failures.
-pub fn settle(
-    renderer: &mut Renderer,
-    problem: &ShadowProblem,
-    options: OptimizeOptions,
-    max_frames: usize,
-) -> Result<Settled, ExperimentError> {
-    let mut optimizer = Optimizer::new(options);
-    let mut matrix = problem.solve(&Parameterization::Focused)?;
-    let max_frames = max_frames.max(1);
-    for frame in 1..=max_frames {
-        let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
-        let lights = std::slice::from_ref(&matrix);
-        let report = renderer.render(&Frame { camera: problem.camera(), lights, masks: false, analysis })?;
-        renderer.wait_for(&report.submission)?;
-        let readback = loop {
-            if let Some(r) = renderer.try_take_analysis() {
-                break r;
-            }
-            renderer.wait_idle()?;
-        };
-        let bits = readback.optimizer_bits();
-        let input = readback.optimizer_input(&bits);
-        let samples = Samples::from_readback(problem, &input, 0, &SampleOptions::default())?;
-        let result = optimizer.optimize(&samples, Some(&matrix))?;
-        matrix = result.matrix;
-        if !result.report.accepted || result.report.fallback.is_some() {
-            return Ok(Settled { matrix, frames: frame, fallback: result.report.fallback });
-        }
-    }
-    Ok(Settled { matrix, frames: max_frames, fallback: None })
 }
 
 /// The smallest view depth of any visible pixel of `masks`.

@@ -17,9 +17,8 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 
 use super::{camera_for, light_for, load_scene, ExperimentConfig, ExperimentError};
-use crate::optimize::{Optimizer, ScheduleOptions, ShadowScheduler};
-use crate::render::{AnalysisRequest, Frame, GpuFrameTimes, Renderer, RendererOptions};
-use crate::{Camera, Light, LightMatrix, Parameterization, SceneBounds, ShadowMapSize, ShadowProblem};
+use crate::render::{GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop};
+use crate::{Camera, Light, Parameterization, SceneBounds, ShadowMapSize};
 
 /// What to time.
 #[derive(Clone, Debug, PartialEq)]
@@ -212,8 +211,14 @@ enum Pipeline {
 }
 
 impl Pipeline {
-    fn analyses(self) -> bool {
-        matches!(self, Self::Optimized | Self::FocusedWithAnalysis)
+    /// The frame loop's policy for this pipeline.
+    fn policy(self) -> LoopPolicy {
+        match self {
+            Self::Focused => LoopPolicy::Fixed(Parameterization::Focused),
+            Self::LiSpsm => LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())),
+            Self::Optimized => LoopPolicy::Optimized,
+            Self::FocusedWithAnalysis => LoopPolicy::FixedWithAnalysis(Parameterization::Focused),
+        }
     }
 }
 
@@ -241,17 +246,9 @@ struct Cell<'a> {
     map: ShadowMapSize,
 }
 
-impl Cell<'_> {
-    fn solve(&self, camera: Camera, map: ShadowMapSize, how: &Parameterization) -> crate::Result<Vec<LightMatrix>> {
-        self.lights.iter().map(|&l| ShadowProblem::new(camera, l, self.bounds, map)?.solve(how)).collect()
-    }
-}
-
 /// One pipeline's state, kept across its blocks.
 struct Run {
-    pipeline: Pipeline,
-    frame: u64,
-    scheduler: ShadowScheduler,
+    shadows: ShadowLoop,
     optimizations: usize,
     analyses: usize,
     timed: Vec<Duration>,
@@ -263,30 +260,14 @@ struct Run {
 
 impl Run {
     fn new(pipeline: Pipeline, lights: usize) -> Result<Self, ExperimentError> {
-        let scheduler = ShadowScheduler::new(lights, ScheduleOptions::default(), Optimizer::new(Default::default()))?;
         Ok(Self {
-            pipeline,
-            frame: 0,
-            scheduler,
+            shadows: ShadowLoop::new(pipeline.policy(), lights, LoopOptions::default())?,
             optimizations: 0,
             analyses: 0,
             timed: Vec::new(),
             cpu: Vec::new(),
             sums: StageSums::default(),
         })
-    }
-
-    /// Feeds every light the newest readback, if one has arrived (never waits).
-    fn consume_readback(&mut self, renderer: &mut Renderer, cell: &Cell<'_>) -> Result<usize, ExperimentError> {
-        let Some(readback) = renderer.try_take_analysis() else { return Ok(0) };
-        let mut optimized = 0;
-        // The samples belong to the camera the pass was rendered with.
-        for (i, samples) in readback.samples_all(cell.lights, cell.bounds, cell.map).into_iter().enumerate() {
-            if self.scheduler.update(i, &samples?, self.frame).is_ok() {
-                optimized += 1;
-            }
-        }
-        Ok(optimized)
     }
 
     /// Renders `frames` frames from an idle device to an idle device; a
@@ -307,63 +288,20 @@ impl Run {
         let (mut optimizations, mut analyses) = (0, 0);
         let mut sums = StageSums::default();
         for _ in 0..frames {
-            let camera = walk(&cell.base, self.frame);
-            if self.pipeline.analyses() {
-                let started = Instant::now();
-                optimizations += self.consume_readback(renderer, cell)?;
-                sums.optimize += started.elapsed();
-            }
-            let solving = Instant::now();
-            let matrices = match self.pipeline {
-                Pipeline::Focused | Pipeline::FocusedWithAnalysis => {
-                    cell.solve(camera, cell.map, &Parameterization::Focused)?
-                }
-                Pipeline::LiSpsm => cell.solve(camera, cell.map, &Parameterization::LiSpsm(Default::default()))?,
-                Pipeline::Optimized => {
-                    let mut matrices = Vec::with_capacity(cell.lights.len());
-                    for i in 0..cell.lights.len() {
-                        matrices.push(match self.scheduler.matrix(i) {
-                            Some(m) => *m,
-                            None => ShadowProblem::new(camera, cell.lights[i], cell.bounds, cell.map)?
-                                .solve(&Parameterization::Focused)?,
-                        });
-                    }
-                    matrices
-                }
-            };
-            let mut analysis_lights = Vec::new();
-            let mut analysis = false;
-            if let Some(plan) = self.scheduler.plan(self.frame).analysis.filter(|_| self.pipeline.analyses()) {
-                analysis = true;
-                if plan.focused != 0 {
-                    // Focused maps for the lights whose turn it is; the rest
-                    // reuse the frame's maps.
-                    let size = self.scheduler.focused_analysis_size(cell.map);
-                    for (i, &light) in cell.lights.iter().enumerate() {
-                        analysis_lights.push(if plan.is_focused(i) {
-                            ShadowProblem::new(camera, light, cell.bounds, size)?.solve(&Parameterization::Focused)?
-                        } else {
-                            matrices[i]
-                        });
-                    }
-                }
-            }
-            sums.solve += solving.elapsed();
-            let request = analysis.then(|| AnalysisRequest {
-                lights: (!analysis_lights.is_empty()).then_some(&analysis_lights[..]),
-                tag: 0,
-            });
-            let report =
-                renderer.render(&Frame { camera: &camera, lights: &matrices, masks: false, analysis: request })?;
-            analyses += usize::from(report.analysis_queued);
+            let camera = walk(&cell.base, self.shadows.frames());
+            let view = LoopView { camera: &camera, lights: cell.lights, bounds: cell.bounds, map: cell.map };
+            let frame = self.shadows.frame(renderer, &view)?;
+            sums.optimize += frame.optimize_time;
+            sums.solve += frame.solve_time;
+            optimizations += frame.optimized.count_ones() as usize;
+            analyses += usize::from(frame.render.analysis_queued);
             // At most one frame in flight besides the next one being built.
-            if let Some(prev) = previous.replace(report.submission) {
+            if let Some(prev) = previous.replace(frame.render.submission) {
                 renderer.wait_for(&prev)?;
             }
             while let Some(times) = renderer.try_take_gpu_times() {
                 sums.add_gpu(&times);
             }
-            self.frame += 1;
             sums.frames += 1;
         }
         renderer.wait_idle()?;
@@ -500,7 +438,7 @@ pub fn run_timing(
             rows.push(row);
             // Readbacks left in the ring belong to this cell.
             renderer.wait_idle()?;
-            while renderer.try_take_analysis().is_some() {}
+            renderer.discard_analyses();
         }
     }
     Ok(rows)

@@ -205,7 +205,7 @@ impl Optimizer {
             report.fallback = Some(Fallback::NoUsableSamples);
             report.accepted = true;
             let mut matrix = focused;
-            matrix.method = Method::SceneOptimized;
+            matrix.method = Method::Optimized;
             matrix.fallback = Some(Fallback::NoUsableSamples);
             return Ok(Optimized { matrix, report });
         }
@@ -335,7 +335,7 @@ impl Optimizer {
             map: problem.map_size(),
             fit: &fit,
             tolerances: problem.tolerances(),
-            method: Method::SceneOptimized,
+            method: Method::Optimized,
             fallback: None,
         }
         .finish(homography, &self.extreme)

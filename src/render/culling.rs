@@ -13,6 +13,8 @@ use std::ops::Range;
 
 use glam::{DMat4, DVec3, DVec4};
 
+use super::lookup::DepthClip;
+
 /// One scene object: its index range and bounding-box corners.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct ObjectBounds {
@@ -42,12 +44,15 @@ impl ObjectBounds {
 }
 
 /// Whether no point of the box survives clipping by `clip_from_world`.
-fn outside(corners: &[DVec4; 8], clip_from_world: &DMat4, clip_depth: bool) -> bool {
+fn outside(corners: &[DVec4; 8], clip_from_world: &DMat4, depth: DepthClip) -> bool {
     let clip = corners.map(|c| *clip_from_world * c);
     // The six plane functions; a point is inside where all are >= 0.
     let planes: [fn(DVec4) -> f64; 6] =
         [|c| c.w + c.x, |c| c.w - c.x, |c| c.w + c.y, |c| c.w - c.y, |c| c.z, |c| c.w - c.z];
-    let count = if clip_depth { 6 } else { 4 };
+    let count = match depth {
+        DepthClip::Clipped => 6,
+        DepthClip::Unclipped => 4,
+    };
     planes[..count].iter().any(|plane| {
         clip.iter().all(|&c| {
             // The GPU evaluates the matrix in f32: cull only what is
@@ -64,11 +69,11 @@ pub(crate) const MAX_DRAWS: usize = 256;
 
 /// The index ranges of the objects that may reach the clip volume of
 /// `clip_from_world`, consecutive ones merged into one draw, at most
-/// [`MAX_DRAWS`] of them (see [`limit_draws`]). `clip_depth: false` for
-/// unclipped depth.
-pub(crate) fn visible_ranges(objects: &[ObjectBounds], clip_from_world: &DMat4, clip_depth: bool) -> Vec<Range<u32>> {
+/// [`MAX_DRAWS`] of them (see [`limit_draws`]). Under unclipped depth the
+/// near and far planes do not cull.
+pub(crate) fn visible_ranges(objects: &[ObjectBounds], clip_from_world: &DMat4, clip: DepthClip) -> Vec<Range<u32>> {
     let mut ranges: Vec<Range<u32>> = Vec::new();
-    for object in objects.iter().filter(|o| !outside(&o.corners, clip_from_world, clip_depth)) {
+    for object in objects.iter().filter(|o| !outside(&o.corners, clip_from_world, clip)) {
         match ranges.last_mut() {
             Some(last) if last.end == object.indices.start => last.end = object.indices.end,
             _ => ranges.push(object.indices.clone()),
@@ -130,10 +135,10 @@ mod tests {
             unit_box(DVec3::new(0.0, 0.0, -200.0), 120..150), // past far
             unit_box(DVec3::new(0.0, -3.0, -20.0), 150..153), // inside
         ];
-        assert_eq!(visible_ranges(&objects, &perspective(), true), vec![0..60, 150..153]);
+        assert_eq!(visible_ranges(&objects, &perspective(), DepthClip::Clipped), vec![0..60, 150..153]);
         // Unclipped depth keeps what lies past far; the box behind the light
         // stays culled (w + x < 0 at all its corners).
-        assert_eq!(visible_ranges(&objects, &perspective(), false), vec![0..60, 120..153]);
+        assert_eq!(visible_ranges(&objects, &perspective(), DepthClip::Unclipped), vec![0..60, 120..153]);
     }
 
     #[test]
@@ -143,12 +148,12 @@ mod tests {
         let m = -perspective();
         let inside_for_m = unit_box(DVec3::new(0.0, 0.0, -10.0), 0..3);
         let behind = unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6);
-        let ranges = visible_ranges(&[inside_for_m, behind], &m, false);
+        let ranges = visible_ranges(&[inside_for_m, behind], &m, DepthClip::Unclipped);
         // Under -M the box in front of the light has w < 0 everywhere:
         // clipped. The one behind has w > 0 and small x, y: drawn (its z
         // lies past w, so only with unclipped depth).
         assert_eq!(ranges, vec![3..6]);
-        assert!(visible_ranges(&[unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6)], &m, true).is_empty());
+        assert!(visible_ranges(&[unit_box(DVec3::new(0.0, 0.0, 10.0), 3..6)], &m, DepthClip::Clipped).is_empty());
     }
 
     #[test]
@@ -158,7 +163,7 @@ mod tests {
         // Touches x = 1 exactly.
         let touching = ObjectBounds::new(0..3, [DVec3::new(1.0, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
         let beyond = ObjectBounds::new(3..6, [DVec3::new(1.01, 0.0, -1.0), DVec3::new(2.0, 0.5, -2.0)]).unwrap();
-        assert_eq!(visible_ranges(&[touching, beyond], &m, true), vec![0..3]);
+        assert_eq!(visible_ranges(&[touching, beyond], &m, DepthClip::Clipped), vec![0..3]);
     }
 
     #[test]

@@ -2,17 +2,18 @@
 //!
 //! One frame ([`Renderer::render`]) is, in order:
 //!
-//! 1. **Shadow passes** (`shaders/shadow.wgsl`): depth only, one per light,
-//!    into one layer each of a `Depth32Float` array; each map is sized by its
-//!    [`LightMatrix::map_size`], storing *linear* light depth (distance
-//!    along the light's rays, normalized to
+//! 1. **Shadow passes** (`shaders/shadow.wgsl` for the default
+//!    [`ShadowLookup`]): one per light, into one layer each of a
+//!    `Depth32Float` array (plus the lookup mode's own per-texel data, if
+//!    any); each map is sized by its [`LightMatrix::map_size`], storing
+//!    *linear* light depth (distance along the light's rays, normalized to
 //!    [`LightMatrix::light_distance`]), which grows away from the light for
-//!    every matrix, so the ordinary depth test serves all of them
-//!    ([`LightMatrix::reverse_depth_test`] does not apply); with unclipped
-//!    depth when [`LightMatrix::needs_unclipped_depth`] is set and the device has
+//!    every matrix, so the ordinary depth test serves all of them; with
+//!    unclipped depth when [`LightMatrix::needs_unclipped_depth`] is set and the device has
 //!    `DEPTH_CLIP_CONTROL`. Bias: [`ShadowBias`], the same for every method.
 //! 2. **Camera pass** (`shaders/camera.wgsl`): the camera's view with hard
-//!    shadows of up to 32 lights (points outside a map count as lit);
+//!    shadows of up to 32 lights (points outside a map count as lit), looked
+//!    up as [`Frame::lookup`] says;
 //!    optionally the full-resolution per-pixel masks (depth, one shadow bit
 //!    and one light-facing bit per light, normal) for the experiments.
 //! 3. **Analysis pass** (`shaders/analysis.wgsl`, when asked for): the same
@@ -37,6 +38,10 @@ mod analysis;
 mod culling;
 mod depth_copy;
 pub mod device;
+mod encode;
+mod frame_loop;
+mod lookup;
+mod options;
 mod output;
 mod passes;
 pub mod readback;
@@ -53,14 +58,19 @@ use crate::{Camera, LightMatrix};
 
 pub use analysis::{AnalysisMeta, AnalysisReadback};
 pub use device::Gpu;
+pub use frame_loop::{LoopError, LoopFrame, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Settled, ShadowLoop};
+pub use lookup::ShadowLookup;
+pub use options::{AnalysisSource, RendererOptions, ShadowBias, ShadowFaces};
 pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
 pub use timing::GpuFrameTimes;
 pub use uniforms::MAX_LIGHTS;
 
-use passes::{CameraTargets, ScenePasses, ShadowMaps, ShadowPass, Target, MASKS_FORMAT, MAX_SHADOW_SLOTS};
+use encode::CameraOutput;
+use lookup::LookupState;
+use passes::{CameraTargets, SceneLayouts, Target, MASKS_FORMAT, MAX_SHADOW_SLOTS};
 use timing::GpuTimer;
-use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
+use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw};
 
 /// Why the renderer refused a request.
 #[derive(Debug, thiserror::Error)]
@@ -145,153 +155,6 @@ pub enum RenderError {
     },
 }
 
-/// The depth bias of every shadow map, the same for every method.
-///
-/// Shadow maps store *linear* light depth (distance along the light's rays,
-/// normalized to the matrix's [`LightDistance`](crate::LightDistance) range;
-/// see `shaders/shadow.wgsl`), and `fs_shadow` adds
-/// `slope_scale · m + constant · 2⁻²⁴` to it, where
-/// `m = max(|∂z/∂x|, |∂z/∂y|)` is the stored depth's slope per texel,
-/// clamped to `clamp` when that is non-zero. A receiver looked up at most half
-/// a texel from a texel centre differs from the stored depth by at most `m`
-/// on a plane, so `slope_scale >= 1` prevents self-shadowing of planar
-/// surfaces; `2` leaves room. Because the depth is linear, `m` depends only
-/// on the surface's angle to the light rays and the texel's size, never on
-/// how a warped map spends its projective depth. No normal offset is used at
-/// lookup, so the only method-dependent effect is each map's own texel size.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadowBias {
-    /// In units of the smallest depth step `r`.
-    pub constant: i32,
-    /// Multiple of the depth slope per texel.
-    pub slope_scale: f32,
-    /// Largest bias in depth units; 0 for none.
-    pub clamp: f32,
-}
-
-impl Default for ShadowBias {
-    fn default() -> Self {
-        Self { constant: 16, slope_scale: 2.0, clamp: 0.0 }
-    }
-}
-
-/// Which faces the shadow pass draws.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ShadowFaces {
-    /// Every triangle (works for open and inconsistently wound meshes; needs
-    /// the slope-scaled [`ShadowBias`] against self-shadowing).
-    #[default]
-    Both,
-    /// Only triangles facing away from the light ("second-depth" shadow
-    /// maps, Wang & Molnar 1994): lit surfaces are compared with the far side
-    /// of their occluders, so no slope-scaled bias is needed and edge-on
-    /// casters are never pushed behind their receivers. Needs closed meshes
-    /// wound counter-clockwise seen from outside (the procedural scene's).
-    /// Mirrored light matrices are detected (`det(clip_from_world) < 0`) and
-    /// cull the other winding.
-    AwayFromLight,
-}
-
-/// The winding cull that keeps only faces turned away from the light of `m`:
-/// a small triangle facing the light is projected by `m`, and by a standard
-/// camera a triangle facing that camera (whose front faces are
-/// counter-clockwise in wgpu); the same sign of their signed areas means the
-/// light sees its facing triangles as front faces, which are then culled.
-/// (The 4x4 determinant does not decide this: the depth row's sign enters it
-/// but not the 2D winding.)
-fn away_from_light_cull(m: &LightMatrix) -> wgpu::Face {
-    let centre = m.clip_from_world.inverse().project_point3(glam::DVec3::new(0.0, 0.0, 0.5));
-    let towards_light = match m.frame {
-        crate::LightFrame::Perspective { position, .. } => position - centre,
-        crate::LightFrame::Orthographic { rotation } => -rotation.row(2),
-    };
-    let light = facing_winding(&m.clip_from_world, centre, towards_light);
-    let view = glam::dcamera::rh::view::look_at_mat4(glam::DVec3::Z, glam::DVec3::ZERO, glam::DVec3::Y);
-    let proj = glam::dcamera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 10.0);
-    let reference = facing_winding(&(proj * view), glam::DVec3::ZERO, glam::DVec3::Z);
-    if light * reference > 0.0 {
-        wgpu::Face::Front
-    } else {
-        wgpu::Face::Back
-    }
-}
-
-/// Signed NDC area of a small triangle at `p` whose counter-clockwise
-/// (outward) side faces `towards`, projected by `m`.
-fn facing_winding(m: &glam::DMat4, p: glam::DVec3, towards: glam::DVec3) -> f64 {
-    let n = towards.normalize_or(glam::DVec3::Y);
-    let (t1, t2) = n.any_orthonormal_pair();
-    // (t1, t2, n) right-handed, so p, p + t1, p + t2 is CCW seen from n.
-    let (t1, t2) = if t1.cross(t2).dot(n) > 0.0 { (t1, t2) } else { (t2, t1) };
-    let size = 1e-3 * p.length().max(1.0);
-    let project = |q: glam::DVec3| m.project_point3(q).truncate();
-    let (a, b, c) = (project(p), project(p + t1 * size), project(p + t2 * size));
-    (b - a).perp_dot(c - a)
-}
-
-/// Where the analysis pass gets the visible surface from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum AnalysisSource {
-    /// A full-screen pass over the camera pass's depth buffer and masks (no
-    /// second geometry pass; its cost does not grow with the scene). Each
-    /// analysis pixel stands for the full-resolution point at its scaled
-    /// centre: the depth there is extrapolated from the nearest
-    /// full-resolution pixel along the one-sided depth differences that
-    /// continue its surface (exact on planes, where screen-space depth is
-    /// affine). Lights whose analysis map is the frame's own take that
-    /// pixel's shadow and facing bits from the camera pass, which then writes
-    /// its masks on analysis frames; others (the periodic focused maps) are
-    /// looked up at the world point reconstructed from the 32-bit depth, with
-    /// the camera pass's interpolated normal.
-    #[default]
-    CameraDepth,
-    /// Draws the scene again at the analysis resolution, with interpolated
-    /// positions and vertex normals. Exact, but on a software rasterizer it
-    /// costs a good part of a camera pass.
-    Geometry,
-}
-
-/// Settings fixed when the renderer is created.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RendererOptions {
-    /// Resolution of the analysis pass (the paper: 180x180 for 1150² screens).
-    pub analysis_size: (u32, u32),
-    /// Where the analysis pass gets the visible surface from.
-    pub analysis_source: AnalysisSource,
-    /// Staging buffers of the analysis readback ring (the paper used 2).
-    pub readback_slots: usize,
-    /// Shadow-map depth bias.
-    pub bias: ShadowBias,
-    /// Which faces the shadow pass rasterizes.
-    pub shadow_faces: ShadowFaces,
-    /// Light that reaches every surface regardless of shadows, in `[0, 1]`.
-    pub ambient: f32,
-    /// Clear colour of the camera pass (linear RGB).
-    pub background: Vec3,
-    /// Record GPU timestamps when the device supports them.
-    pub timestamps: bool,
-    /// Leave out of each scene pass the objects whose bounding box lies
-    /// outside its clip volume (the output is the same; see
-    /// [`FrameReport::shadow_triangles`]).
-    pub cull_objects: bool,
-}
-
-impl Default for RendererOptions {
-    fn default() -> Self {
-        Self {
-            analysis_size: (180, 180),
-            analysis_source: AnalysisSource::CameraDepth,
-            readback_slots: 3,
-            bias: ShadowBias::default(),
-            shadow_faces: ShadowFaces::Both,
-            ambient: 0.25,
-            background: Vec3::new(0.55, 0.68, 0.85),
-            timestamps: true,
-            cull_objects: true,
-        }
-    }
-}
-
 /// An analysis pass to render this frame.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AnalysisRequest<'a> {
@@ -316,6 +179,18 @@ pub struct Frame<'a> {
     pub masks: bool,
     /// Render the low-resolution analysis pass and queue its readback.
     pub analysis: Option<AnalysisRequest<'a>>,
+    /// How the camera and analysis passes look shadows up (and so which
+    /// maps the shadow passes write).
+    pub lookup: ShadowLookup,
+}
+
+impl<'a> Frame<'a> {
+    /// A frame of `lights` seen by `camera` with the default lookup, no
+    /// full-resolution masks and no analysis pass.
+    #[must_use]
+    pub fn new(camera: &'a Camera, lights: &'a [LightMatrix]) -> Self {
+        Self { camera, lights, masks: false, analysis: None, lookup: ShadowLookup::default() }
+    }
 }
 
 /// What [`Renderer::render`] did.
@@ -353,10 +228,20 @@ struct GpuScene {
     objects: Vec<culling::ObjectBounds>,
 }
 
-/// Per-frame uniforms and bind group of one scene pass (camera or analysis).
-struct SceneBindings {
+/// The camera pass's lights and its group-0 bind group.
+struct CameraBindings {
     lights: wgpu::Buffer,
-    bind_group: Option<wgpu::BindGroup>,
+    bind_group: wgpu::BindGroup,
+}
+
+/// A frame's shadow maps: the frame's lights, then the analysis pass's own.
+struct MapSlots<'f> {
+    /// The matrix of each slot (array layer).
+    maps: Vec<&'f LightMatrix>,
+    /// The layer of each analysis light.
+    analysis_layers: Vec<u32>,
+    /// Index into [`Renderer::lookups`].
+    lookup: usize,
 }
 
 /// Shadows for many lights, a camera pass and asynchronous low-resolution
@@ -368,12 +253,14 @@ pub struct Renderer {
     max_texture: u32,
     unclipped_available: bool,
     scene: GpuScene,
-    shadow: ShadowPass,
-    passes: ScenePasses,
+    layouts: SceneLayouts,
+    /// Pipelines and maps of each lookup mode used so far.
+    lookups: Vec<LookupState>,
     camera_uniforms: wgpu::Buffer,
-    camera_bindings: SceneBindings,
-    analysis_bindings: SceneBindings,
-    shadow_maps: ShadowMaps,
+    camera_bindings: CameraBindings,
+    analysis_lights: wgpu::Buffer,
+    /// Refers to the camera targets; `None` after they changed.
+    analysis_bind_group: Option<wgpu::BindGroup>,
     camera_targets: Option<CameraTargets>,
     analysis_masks: Target,
     /// Depth buffer of [`AnalysisSource::Geometry`].
@@ -387,6 +274,8 @@ pub struct Renderer {
     frame: u64,
     /// Lights of the last frame (for reading maps back).
     last_lights: Vec<LightMatrix>,
+    /// The lookup mode of the last frame (index into `lookups`).
+    last_lookup: Option<usize>,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -466,23 +355,38 @@ impl Renderer {
             index_count: indices.len() as u32,
             objects,
         })?;
-        let shadow = device::capture(device, "shadow pass pipelines", || ShadowPass::new(device, unclipped_available))?;
-        let passes = device::capture(device, "camera and analysis pipelines", || ScenePasses::new(device))?;
         let camera_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lixel camera uniforms"),
             size: std::mem::size_of::<CameraRaw>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let lights_buffer = |label| SceneBindings {
-            lights: device.create_buffer(&wgpu::BufferDescriptor {
+        let lights_buffer = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: std::mem::size_of::<LightsRaw>() as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
-            }),
-            bind_group: None,
+            })
         };
+        let layouts = SceneLayouts::new(device);
+        let camera_lights = lights_buffer("lixel camera pass lights");
+        let camera_bindings = CameraBindings {
+            bind_group: device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("lixel camera bind group"),
+                layout: &layouts.camera,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: camera_uniforms.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: camera_lights.as_entire_binding() },
+                ],
+            }),
+            lights: camera_lights,
+        };
+        // The default lookup is built now, so that the first frame does not
+        // pay for its pipelines.
+        let lookups = vec![device::capture(device, "shadow, camera and analysis pipelines", || {
+            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available)
+        })?];
         let ring = ReadbackRing::new(
             device,
             "lixel analysis readback",
@@ -495,12 +399,12 @@ impl Renderer {
             max_texture,
             unclipped_available,
             scene: gpu_scene,
-            shadow,
-            passes,
+            layouts,
+            lookups,
             camera_uniforms,
-            camera_bindings: lights_buffer("lixel camera pass lights"),
-            analysis_bindings: lights_buffer("lixel analysis pass lights"),
-            shadow_maps: ShadowMaps::new(device, 1, 1, 1),
+            camera_bindings,
+            analysis_lights: lights_buffer("lixel analysis pass lights"),
+            analysis_bind_group: None,
             camera_targets: None,
             analysis_masks: Target::new(device, "lixel analysis masks", MASKS_FORMAT, aw, ah),
             analysis_depth: (options.analysis_source == AnalysisSource::Geometry)
@@ -509,6 +413,7 @@ impl Renderer {
             timer,
             frame: 0,
             last_lights: Vec::new(),
+            last_lookup: None,
             options,
             errors,
             depth_copy: std::sync::OnceLock::new(),
@@ -568,6 +473,66 @@ impl Renderer {
     pub fn render(&mut self, frame: &Frame<'_>) -> Result<FrameReport, RenderError> {
         let started = Instant::now();
         self.errors.take(&self.device, "an earlier device call")?;
+        let slots = self.prepare(frame)?;
+        self.write_uniforms(frame, &slots);
+
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some(&format!("lixel frame {}", self.frame)),
+        });
+        let timer = self.timer.as_mut().and_then(GpuTimer::begin_frame);
+        // A full ring skips the analysis (never waits for a slot).
+        let analysis_staging = frame.analysis.and_then(|_| self.ring.acquire().map(|(slot, b)| (slot, b.clone())));
+        let state = &self.lookups[slots.lookup];
+        let shadow = self.encode_shadow_passes(&mut encoder, state, &slots.maps, timer.as_ref());
+        // The depth analysis reads the camera pass's masks.
+        let camera_output = if frame.masks
+            || (analysis_staging.is_some() && self.options.analysis_source == AnalysisSource::CameraDepth)
+        {
+            CameraOutput::ColorAndMasks
+        } else {
+            CameraOutput::Color
+        };
+        let camera_triangles =
+            self.encode_camera_pass(&mut encoder, state, frame.camera, camera_output, timer.as_ref());
+        if let Some((_, buffer)) = &analysis_staging {
+            self.encode_analysis_pass(&mut encoder, state, frame.camera, buffer, timer.as_ref());
+        }
+        if let (Some(t), Some(timer)) = (timer.as_ref(), self.timer.as_ref()) {
+            timer.resolve(&mut encoder, t);
+        }
+        let submission = self.queue.submit([encoder.finish()]);
+        self.errors.take(&self.device, "rendering a frame")?;
+
+        let analysis_slot = analysis_staging.map(|(slot, _)| slot);
+        if let (Some(slot), Some(request)) = (analysis_slot, frame.analysis) {
+            let (w, h) = self.options.analysis_size;
+            let lights = request.lights.unwrap_or(frame.lights).to_vec();
+            let meta = AnalysisMeta { camera: *frame.camera, lights, width: w, height: h, tag: request.tag };
+            self.ring.submitted(slot, self.frame, meta);
+        }
+        if let (Some(t), Some(timer)) = (timer, self.timer.as_mut()) {
+            timer.submitted(t, self.frame, !slots.maps.is_empty(), analysis_slot.is_some());
+        }
+        self.last_lights = frame.lights.to_vec();
+        self.last_lookup = Some(slots.lookup);
+        let report = FrameReport {
+            frame: self.frame,
+            submission,
+            analysis_skipped: frame.analysis.is_some() && analysis_slot.is_none(),
+            analysis_queued: analysis_slot.is_some(),
+            unclipped_unavailable: shadow.unclipped_unavailable,
+            shadow_passes: slots.maps.len() as u32,
+            shadow_triangles: shadow.triangles,
+            camera_triangles,
+            cpu_time: started.elapsed(),
+        };
+        self.frame += 1;
+        Ok(report)
+    }
+
+    /// Validates `frame`, assigns its shadow-map slots and makes sure the
+    /// lookup mode's pipelines, the maps and the targets exist.
+    fn prepare<'f>(&mut self, frame: &Frame<'f>) -> Result<MapSlots<'f>, RenderError> {
         let analysis_lights = frame.analysis.and_then(|a| a.lights);
         self.validate(frame.lights)?;
         if let Some(lights) = analysis_lights {
@@ -578,26 +543,39 @@ impl Renderer {
 
         // Shadow-map slots: the frame's lights, then the analysis pass's own
         // where they differ from the frame's light of the same index.
-        let mut slots: Vec<&LightMatrix> = frame.lights.iter().collect();
+        let mut maps: Vec<&LightMatrix> = frame.lights.iter().collect();
         let mut analysis_layers = Vec::new();
         for (i, m) in analysis_lights.into_iter().flatten().enumerate() {
             if frame.lights.get(i) == Some(m) {
                 analysis_layers.push(i as u32);
             } else {
-                analysis_layers.push(slots.len() as u32);
-                slots.push(m);
+                analysis_layers.push(maps.len() as u32);
+                maps.push(m);
             }
         }
-        debug_assert!(slots.len() <= MAX_SHADOW_SLOTS);
-        self.ensure_resources(&slots, viewport.x, viewport.y);
+        debug_assert!(maps.len() <= MAX_SHADOW_SLOTS);
+        let lookup = self.lookup_state(frame.lookup);
+        self.ensure_resources(lookup, &maps, viewport.x, viewport.y);
+        Ok(MapSlots { maps, analysis_layers, lookup })
+    }
 
-        // Uniforms. Light intensity is split so that n lights add up to 1.
+    /// The index of `lookup`'s pipelines and maps, built on first use.
+    fn lookup_state(&mut self, lookup: ShadowLookup) -> usize {
+        if let Some(i) = self.lookups.iter().position(|s| s.lookup == lookup) {
+            return i;
+        }
+        self.lookups.push(LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available));
+        self.lookups.len() - 1
+    }
+
+    /// Camera, lights of both scene passes and the shadow passes' slots.
+    /// Light intensity is split so that n lights add up to 1.
+    fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
         let raw_lights = |lights: &[LightMatrix], layer: &dyn Fn(usize) -> u32| -> Vec<LightRaw> {
             let color = light_color(lights.len());
             lights.iter().enumerate().map(|(i, m)| LightRaw::to_raw(m, layer(i), color)).collect()
         };
-
         self.queue.write_buffer(
             &self.camera_uniforms,
             0,
@@ -608,73 +586,29 @@ impl Renderer {
             0,
             bytemuck::bytes_of(&LightsRaw::to_raw(&raw_lights(frame.lights, &|i| i as u32))),
         );
-        if frame.analysis.is_some() {
-            let (raw, layers): (_, &dyn Fn(usize) -> u32) = match analysis_lights {
-                Some(lights) => (raw_lights(lights, &|i| analysis_layers[i]), &|i| analysis_layers[i]),
+        if let Some(request) = frame.analysis {
+            let layers = &slots.analysis_layers;
+            let (raw, layer): (_, &dyn Fn(usize) -> u32) = match request.lights {
+                Some(lights) => (raw_lights(lights, &|i| layers[i]), &|i| layers[i]),
                 None => (raw_lights(frame.lights, &|i| i as u32), &|i| i as u32),
             };
             // The depth analysis takes the camera pass's bits of a light whose
             // map is the frame's own (the camera pass then writes its masks).
             let camera_bits = match self.options.analysis_source {
                 AnalysisSource::CameraDepth => (0..raw.len().min(frame.lights.len()))
-                    .filter(|&i| layers(i) == i as u32)
+                    .filter(|&i| layer(i) == i as u32)
                     .fold(0u32, |bits, i| bits | 1 << i),
                 AnalysisSource::Geometry => 0,
             };
             let lights = LightsRaw::with_camera_bits(&raw, camera_bits);
-            self.queue.write_buffer(&self.analysis_bindings.lights, 0, bytemuck::bytes_of(&lights));
+            self.queue.write_buffer(&self.analysis_lights, 0, bytemuck::bytes_of(&lights));
         }
         let shadow_raw: Vec<ShadowPassRaw> =
-            slots.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
+            slots.maps.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
         if !shadow_raw.is_empty() {
-            self.queue.write_buffer(&self.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
+            let state = &self.lookups[slots.lookup];
+            self.queue.write_buffer(&state.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
         }
-
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some(&format!("lixel frame {}", self.frame)),
-        });
-        let timer = self.timer.as_mut().and_then(GpuTimer::begin_frame);
-        // A full ring skips the analysis (never waits for a slot).
-        let analysis_staging = frame.analysis.and_then(|_| self.ring.acquire().map(|(slot, b)| (slot, b.clone())));
-        let analysis_skipped = frame.analysis.is_some() && analysis_staging.is_none();
-        let (unclipped_unavailable, shadow_triangles) = self.encode_shadow_passes(&mut encoder, &slots, timer.as_ref());
-        // The depth analysis reads the camera pass's masks.
-        let camera_masks =
-            frame.masks || (analysis_staging.is_some() && self.options.analysis_source == AnalysisSource::CameraDepth);
-        let camera_triangles = self.encode_camera_pass(&mut encoder, frame.camera, camera_masks, timer.as_ref());
-        let analysis_slot = analysis_staging.map(|(slot, buffer)| {
-            self.encode_analysis_pass(&mut encoder, frame.camera, &buffer, timer.as_ref());
-            slot
-        });
-        if let (Some(t), Some(timer)) = (timer.as_ref(), self.timer.as_ref()) {
-            timer.resolve(&mut encoder, t);
-        }
-        let submission = self.queue.submit([encoder.finish()]);
-        self.errors.take(&self.device, "rendering a frame")?;
-
-        if let (Some(slot), Some(request)) = (analysis_slot, frame.analysis) {
-            let (w, h) = self.options.analysis_size;
-            let lights = analysis_lights.unwrap_or(frame.lights).to_vec();
-            let meta = AnalysisMeta { camera: *frame.camera, lights, width: w, height: h, tag: request.tag };
-            self.ring.submitted(slot, self.frame, meta);
-        }
-        if let (Some(t), Some(timer)) = (timer, self.timer.as_mut()) {
-            timer.submitted(t, self.frame, !slots.is_empty(), analysis_slot.is_some());
-        }
-        self.last_lights = frame.lights.to_vec();
-        let report = FrameReport {
-            frame: self.frame,
-            submission,
-            analysis_skipped,
-            analysis_queued: analysis_slot.is_some(),
-            unclipped_unavailable,
-            shadow_passes: slots.len() as u32,
-            shadow_triangles,
-            camera_triangles,
-            cpu_time: started.elapsed(),
-        };
-        self.frame += 1;
-        Ok(report)
     }
 
     /// The newest analysis readback that has arrived, without waiting (one
@@ -684,6 +618,13 @@ impl Renderer {
         // The frame that would consume it is the next one to be rendered.
         let readback = self.ring.try_take(&self.device, self.frame)?;
         Some(AnalysisReadback::decode(readback))
+    }
+
+    /// Drops every analysis readback that has arrived (for example when the
+    /// scene or the lights change, so that a new [`ShadowLoop`] does not
+    /// optimize from the old ones); returns how many.
+    pub fn discard_analyses(&mut self) -> usize {
+        std::iter::from_fn(|| self.try_take_analysis()).count()
     }
 
     /// GPU times of the newest frame whose timestamps have arrived, without
@@ -728,233 +669,33 @@ impl Renderer {
         Ok(())
     }
 
-    /// Grows the shadow-map array and the camera targets as needed and
-    /// (re)creates the bind groups that refer to them.
-    fn ensure_resources(&mut self, slots: &[&LightMatrix], width: u32, height: u32) {
-        let need_w = slots.iter().map(|m| m.map_size.width).max().unwrap_or(1);
-        let need_h = slots.iter().map(|m| m.map_size.height).max().unwrap_or(1);
-        let need_layers = (slots.len() as u32).max(1);
-        let maps = &self.shadow_maps;
-        if need_w > maps.width || need_h > maps.height || need_layers > maps.layers() {
-            self.shadow_maps = ShadowMaps::new(
-                &self.device,
-                need_w.max(maps.width),
-                need_h.max(maps.height),
-                need_layers.max(maps.layers()),
-            );
-            self.camera_bindings.bind_group = None;
-            self.analysis_bindings.bind_group = None;
-        }
+    /// Grows the lookup mode's maps and the camera targets as needed and
+    /// (re)creates the analysis bind group, which refers to the latter.
+    fn ensure_resources(&mut self, lookup: usize, maps: &[&LightMatrix], width: u32, height: u32) {
+        let need_w = maps.iter().map(|m| m.map_size.width).max().unwrap_or(1);
+        let need_h = maps.iter().map(|m| m.map_size.height).max().unwrap_or(1);
+        let need_layers = (maps.len() as u32).max(1);
+        self.lookups[lookup].ensure_maps(&self.device, need_w, need_h, need_layers);
         if self.camera_targets.as_ref().is_none_or(|t| t.width != width || t.height != height) {
             self.camera_targets = Some(CameraTargets::new(&self.device, "lixel camera", width, height));
             // It binds the camera depth.
-            self.analysis_bindings.bind_group = None;
+            self.analysis_bind_group = None;
         }
-        let camera = self.camera_targets.as_ref().expect("created above");
-        let camera_views = Some((&camera.depth.view, &camera.masks.view));
-        for (bindings, layout, views, label) in [
-            (&mut self.camera_bindings, &self.passes.camera_layout, None, "lixel camera bind group"),
-            (&mut self.analysis_bindings, &self.passes.analysis_layout, camera_views, "lixel analysis bind group"),
-        ] {
-            if bindings.bind_group.is_none() {
-                let mut entries = vec![
+        if self.analysis_bind_group.is_none() {
+            let camera = self.camera_targets.as_ref().expect("created above");
+            let texture =
+                |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
+            self.analysis_bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("lixel analysis bind group"),
+                layout: &self.layouts.analysis,
+                entries: &[
                     wgpu::BindGroupEntry { binding: 0, resource: self.camera_uniforms.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: bindings.lights.as_entire_binding() },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(&self.shadow_maps.array_view),
-                    },
-                ];
-                if let Some((depth, masks)) = views {
-                    entries
-                        .push(wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(depth) });
-                    entries
-                        .push(wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(masks) });
-                }
-                bindings.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(label),
-                    layout,
-                    entries: &entries,
-                }));
-            }
+                    wgpu::BindGroupEntry { binding: 1, resource: self.analysis_lights.as_entire_binding() },
+                    texture(3, &camera.depth.view),
+                    texture(4, &camera.masks.view),
+                ],
+            }));
         }
-    }
-
-    /// One depth-only pass per slot; returns how many lights wanted
-    /// unclipped depth the device lacks.
-    fn encode_shadow_passes(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        slots: &[&LightMatrix],
-        timer: Option<&timing::FrameQueries>,
-    ) -> (u32, u64) {
-        let mut unavailable = 0;
-        let mut triangles = 0;
-        let last = slots.len().saturating_sub(1);
-        for (i, m) in slots.iter().enumerate() {
-            // Linear light depth grows away from the light whatever the
-            // matrix's own depth row does, so the ordinary test always applies.
-            let reversed = false;
-            let cull = match self.options.shadow_faces {
-                ShadowFaces::Both => None,
-                ShadowFaces::AwayFromLight => Some(away_from_light_cull(m)),
-            };
-            let (pipeline, unclipped) = self.shadow.pipeline(reversed, m.needs_unclipped_depth, cull);
-            if m.needs_unclipped_depth && !unclipped {
-                unavailable += 1;
-            }
-            let timestamp_writes = self
-                .timer
-                .as_ref()
-                .zip(timer)
-                .and_then(|(t, q)| t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last));
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(&format!("lixel shadow pass {i}")),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.shadow_maps.layer_views[i],
-                    // Far is 1 (0 under a reversed test): nothing blocks.
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(if reversed { 0.0 } else { 1.0 }),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            let (w, h) = (m.map_size.width, m.map_size.height);
-            // Only the light's own rectangle at the top-left of the layer.
-            pass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
-            pass.set_scissor_rect(0, 0, w, h);
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &self.shadow.bind_group, &[(i as u64 * SHADOW_SLOT_STRIDE) as u32]);
-            triangles += self.draw_scene(&mut pass, &m.clip_from_world, !unclipped);
-        }
-        (unavailable, triangles)
-    }
-
-    /// Draws the scene, less the objects outside the clip volume of
-    /// `clip_from_world` (with `clip_depth: false` for unclipped depth) when
-    /// [`RendererOptions::cull_objects`] is set; returns the triangles drawn.
-    fn draw_scene(&self, pass: &mut wgpu::RenderPass<'_>, clip_from_world: &glam::DMat4, clip_depth: bool) -> u64 {
-        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
-        pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        if !self.options.cull_objects {
-            pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
-            return u64::from(self.scene.index_count / 3);
-        }
-        let mut triangles = 0;
-        for range in culling::visible_ranges(&self.scene.objects, clip_from_world, clip_depth) {
-            triangles += u64::from(range.len() as u32 / 3);
-            pass.draw_indexed(range, 0, 0..1);
-        }
-        triangles
-    }
-
-    fn encode_camera_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        camera: &Camera,
-        masks: bool,
-        timer: Option<&timing::FrameQueries>,
-    ) -> u64 {
-        let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
-        let bg = self.options.background.as_dvec3();
-        let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
-            view: &targets.color.view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color { r: bg.x, g: bg.y, b: bg.z, a: 1.0 }),
-                store: wgpu::StoreOp::Store,
-            },
-        })];
-        if masks {
-            color_attachments.push(Some(masks_attachment(&targets.masks.view)));
-        }
-        let timestamp_writes =
-            self.timer.as_ref().zip(timer).and_then(|(t, q)| t.pass_writes(q, timing::Stage::Camera, true, true));
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("lixel camera pass"),
-            color_attachments: &color_attachments,
-            depth_stencil_attachment: Some(depth_attachment(&targets.depth.view)),
-            timestamp_writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(if masks { &self.passes.color_masks } else { &self.passes.color });
-        pass.set_bind_group(0, self.camera_bindings.bind_group.as_ref(), &[]);
-        self.draw_scene(&mut pass, &camera.clip_from_world(), true)
-    }
-
-    fn encode_analysis_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        camera: &Camera,
-        staging: &wgpu::Buffer,
-        timer: Option<&timing::FrameQueries>,
-    ) {
-        let timestamp_writes =
-            self.timer.as_ref().zip(timer).and_then(|(t, q)| t.pass_writes(q, timing::Stage::Analysis, true, true));
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("lixel analysis pass"),
-                color_attachments: &[Some(masks_attachment(&self.analysis_masks.view))],
-                depth_stencil_attachment: self.analysis_depth.as_ref().map(|t| depth_attachment(&t.view)),
-                timestamp_writes,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, self.analysis_bindings.bind_group.as_ref(), &[]);
-            match self.options.analysis_source {
-                AnalysisSource::CameraDepth => {
-                    pass.set_pipeline(&self.passes.analysis_depth);
-                    pass.draw(0..3, 0..1);
-                }
-                AnalysisSource::Geometry => {
-                    pass.set_pipeline(&self.passes.analysis_geometry);
-                    self.draw_scene(&mut pass, &camera.clip_from_world(), true);
-                }
-            }
-        }
-        let (w, h) = self.options.analysis_size;
-        encoder.copy_texture_to_buffer(
-            self.analysis_masks.texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: staging,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(analysis::padded_row_bytes(w) as u32),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        );
-    }
-}
-
-/// Masks attachment cleared to "background": depth 1.0's bits, no bits set.
-fn masks_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
-    wgpu::RenderPassColorAttachment {
-        view,
-        depth_slice: None,
-        resolve_target: None,
-        ops: wgpu::Operations {
-            // Integer targets take their clear value through f64; 1.0f32's
-            // bits (0x3f80_0000) are exact in f64.
-            load: wgpu::LoadOp::Clear(wgpu::Color { r: f64::from(1.0f32.to_bits()), g: 0.0, b: 0.0, a: 0.0 }),
-            store: wgpu::StoreOp::Store,
-        },
-    }
-}
-
-fn depth_attachment(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
-    wgpu::RenderPassDepthStencilAttachment {
-        view,
-        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-        stencil_ops: None,
     }
 }
 

@@ -13,17 +13,16 @@ pub struct DepthImage {
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// Depth in `[0, 1]` per texel (cleared value where nothing was drawn:
-    /// 1, or 0 under a reversed depth test).
+    /// Depth in `[0, 1]` per texel (1 where nothing was drawn).
     pub depth: Vec<f32>,
 }
 
 /// A picture of a shadow map: depth mapped to grey, nearest to the light
 /// brightest, normalised over the drawn texels; texels where nothing was
-/// drawn are dark blue. `reversed` tells which clear value means "empty".
+/// drawn (depth 1, the clear value) are dark blue.
 #[must_use]
-pub fn shadow_map_image(map: &DepthImage, reversed: bool) -> image::RgbaImage {
-    let empty = if reversed { 0.0 } else { 1.0 };
+pub fn shadow_map_image(map: &DepthImage) -> image::RgbaImage {
+    let empty = 1.0;
     let drawn = || map.depth.iter().copied().filter(move |&d| d != empty);
     let lo = drawn().fold(f32::INFINITY, f32::min);
     let hi = drawn().fold(f32::NEG_INFINITY, f32::max);
@@ -33,10 +32,7 @@ pub fn shadow_map_image(map: &DepthImage, reversed: bool) -> image::RgbaImage {
         if d == empty {
             return image::Rgba([20, 24, 60, 255]);
         }
-        let mut t = (d - lo) / span;
-        if !reversed {
-            t = 1.0 - t;
-        }
+        let t = 1.0 - (d - lo) / span;
         let g = (40.0 + 215.0 * t).round() as u8;
         image::Rgba([g, g, g, 255])
     })
@@ -86,6 +82,7 @@ impl Renderer {
         let matrix =
             self.last_lights.get(light).ok_or(RenderError::NoSuchLight { light, count: self.last_lights.len() })?;
         let (width, height) = (matrix.map_size.width, matrix.map_size.height);
+        let maps = &self.lookups[self.last_lookup.ok_or(RenderError::NothingRendered)?].maps;
         let copy = match self.depth_copy.get() {
             Some(copy) => copy,
             None => {
@@ -98,7 +95,7 @@ impl Renderer {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel shadow-map readback") });
         let target = device::capture(&self.device, "shadow-map readback", || {
-            copy.encode(&self.device, &mut encoder, &self.shadow_maps.array_view, light as u32, width, height)
+            copy.encode(&self.device, &mut encoder, &maps.depth_array, light as u32, width, height)
         })?;
         self.queue.submit([encoder.finish()]);
         let bytes = self.read_texture(&target.texture, wgpu::TextureAspect::All, 0, width, height, 4)?;

@@ -63,7 +63,7 @@ impl LightRaw {
             color: color.extend(0.0).to_array(),
             map_size: [matrix.map_size.width as f32, matrix.map_size.height as f32],
             layer,
-            // Linear depth (see shadow.wgsl) never needs the reversed test.
+            // Reserved.
             flags: 0,
             depth: {
                 let [min, inv_span] = linear_depth_range(matrix);

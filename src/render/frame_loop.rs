@@ -1,0 +1,321 @@
+//! The shadow frame loop of an engine, in one place: [`ShadowLoop`].
+//!
+//! The solver's pieces are renderer-free ([`ShadowScheduler`] keeps the
+//! per-light matrices and the paper's cadence, [`Optimizer`] moves a matrix
+//! from a readback's samples); the renderer's are solver-free (an analysis
+//! pass, a readback ring that never waits). Joining them has an order that is
+//! easy to get subtly wrong — take the readback that has arrived, feed each
+//! light's samples for the camera the pass was rendered with, fall back to a
+//! focused matrix until a light has been optimized, plan the analysis pass
+//! with small focused maps for the lights whose turn it is — so the loop
+//! lives here once, and the experiment, the timing harness and the examples
+//! all call it.
+
+use std::time::{Duration, Instant};
+
+use super::{AnalysisRequest, Frame, FrameReport, ReadbackLatency, RenderError, Renderer, ShadowLookup};
+use crate::optimize::{OptimizeOptions, Optimizer, ScheduleOptions, ShadowScheduler};
+use crate::ShadowProblem;
+use crate::{Camera, Fallback, Light, LightMatrix, LixelError, Parameterization, SceneBounds, ShadowMapSize};
+
+/// Which matrices a [`ShadowLoop`] renders with.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum LoopPolicy {
+    /// Every light solved with one parameterization each frame; no analysis
+    /// passes.
+    Fixed(Parameterization),
+    /// Scene-optimized matrices: an analysis pass every few frames, each
+    /// readback optimizing every light (focused matrices until a light's
+    /// first optimization).
+    Optimized,
+    /// The fixed matrices are shown while the analysis passes, readbacks and
+    /// optimizations of [`Optimized`](Self::Optimized) run and are thrown
+    /// away: the machinery's own cost, for timing.
+    FixedWithAnalysis(Parameterization),
+}
+
+impl LoopPolicy {
+    /// Whether the loop runs analysis passes and the optimizer.
+    #[must_use]
+    pub fn analyses(&self) -> bool {
+        !matches!(self, Self::Fixed(_))
+    }
+}
+
+/// Settings of a [`ShadowLoop`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoopOptions {
+    /// Cadence of the analysis passes and the focused lookups.
+    pub schedule: ScheduleOptions,
+    /// The optimizer's settings.
+    pub optimize: OptimizeOptions,
+    /// How the camera and analysis passes look shadows up.
+    pub lookup: ShadowLookup,
+}
+
+/// What one frame sees: the camera, the lights, the scene bounds and the
+/// size of every light's map.
+#[derive(Clone, Copy, Debug)]
+pub struct LoopView<'a> {
+    /// The viewer.
+    pub camera: &'a Camera,
+    /// One map each (at most [`MAX_LIGHTS`](super::MAX_LIGHTS)).
+    pub lights: &'a [Light],
+    /// Bounds of the scene's casters and receivers.
+    pub bounds: SceneBounds,
+    /// The size of every light's map.
+    pub map: ShadowMapSize,
+}
+
+impl LoopView<'_> {
+    fn solve(&self, map: ShadowMapSize, how: &Parameterization) -> crate::Result<Vec<LightMatrix>> {
+        self.lights.iter().map(|&light| self.solve_one(light, map, how)).collect()
+    }
+
+    fn solve_one(&self, light: Light, map: ShadowMapSize, how: &Parameterization) -> crate::Result<LightMatrix> {
+        ShadowProblem::new(*self.camera, light, self.bounds, map)?.solve(how)
+    }
+}
+
+/// The analysis readback a frame consumed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReadbackInfo {
+    /// The frame that rendered it.
+    pub frame: u64,
+    /// How long it took to arrive.
+    pub latency: ReadbackLatency,
+    /// Bit `i`: light `i` was looked up in a plain focused map.
+    pub focused: u32,
+}
+
+/// What [`ShadowLoop::frame`] did.
+#[derive(Clone, Debug)]
+pub struct LoopFrame {
+    /// The matrices rendered, one per light.
+    pub matrices: Vec<LightMatrix>,
+    /// The renderer's report of the frame.
+    pub render: FrameReport,
+    /// The readback consumed at the start of the frame, if one had arrived.
+    pub readback: Option<ReadbackInfo>,
+    /// Bit `i`: light `i` was optimized from that readback.
+    pub optimized: u32,
+    /// Bit `i`: light `i`'s samples or optimization failed; it keeps its
+    /// matrix.
+    pub failed: u32,
+    /// Lights whose optimization fell back, with the reason.
+    pub fallbacks: Vec<(usize, Fallback)>,
+    /// CPU time of taking the readback and optimizing.
+    pub optimize_time: Duration,
+    /// CPU time of solving the frame's matrices and the analysis maps.
+    pub solve_time: Duration,
+}
+
+/// The result of [`ShadowLoop::settle`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settled {
+    /// The matrix of each light the loop settled on.
+    pub matrices: Vec<LightMatrix>,
+    /// Frames (analysis passes) it took.
+    pub frames: usize,
+    /// The optimizer's last fallback of each light, if it stopped on one.
+    pub fallbacks: Vec<Option<Fallback>>,
+}
+
+/// Why a frame failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LoopError {
+    /// The renderer refused the frame or the device failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// A matrix could not be solved (bad camera, light or bounds), or, in
+    /// [`ShadowLoop::settle`], a readback could not be optimized.
+    #[error(transparent)]
+    Solve(#[from] LixelError),
+}
+
+/// The frame loop: per-light matrices, the analysis cadence, the
+/// non-blocking readback and the optimizer, one call per frame.
+///
+/// ```no_run
+/// # fn demo(renderer: &mut lixel::render::Renderer, camera: &lixel::Camera, lights: &[lixel::Light],
+/// #         bounds: lixel::SceneBounds) -> Result<(), lixel::render::LoopError> {
+/// use lixel::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
+/// let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, lights.len(), LoopOptions::default())?;
+/// let map = lixel::ShadowMapSize::square(1024);
+/// for _frame in 0..3 {
+///     let done = shadows.frame(renderer, &LoopView { camera, lights, bounds, map })?;
+///     // done.matrices were rendered; done.render.submission paces frames.
+/// }
+/// # Ok(()) }
+/// ```
+#[derive(Clone, Debug)]
+pub struct ShadowLoop {
+    policy: LoopPolicy,
+    lookup: ShadowLookup,
+    scheduler: ShadowScheduler,
+    frame: u64,
+}
+
+impl ShadowLoop {
+    /// A loop for `light_count` lights.
+    ///
+    /// # Errors
+    /// [`LixelError::UnusableSamples`] for more than 32 lights or a zero
+    /// cadence (see [`ShadowScheduler::new`]).
+    pub fn new(policy: LoopPolicy, light_count: usize, options: LoopOptions) -> Result<Self, LixelError> {
+        let scheduler = ShadowScheduler::new(light_count, options.schedule, Optimizer::new(options.optimize))?;
+        Ok(Self { policy, lookup: options.lookup, scheduler, frame: 0 })
+    }
+
+    /// The policy.
+    #[must_use]
+    pub fn policy(&self) -> &LoopPolicy {
+        &self.policy
+    }
+
+    /// Frames rendered so far.
+    #[must_use]
+    pub fn frames(&self) -> u64 {
+        self.frame
+    }
+
+    /// The per-light state (current optimized matrices, last reports).
+    #[must_use]
+    pub fn scheduler(&self) -> &ShadowScheduler {
+        &self.scheduler
+    }
+
+    /// Renders one frame: consumes the newest analysis readback if one has
+    /// arrived (never waits), optimizes every light from it, renders the
+    /// lights' current matrices and, when the cadence says so, an analysis
+    /// pass. Frame pacing ([`Renderer::wait_for`]) is the caller's.
+    ///
+    /// # Errors
+    /// [`LoopError::Render`] when the renderer refuses the frame;
+    /// [`LoopError::Solve`] when a light's matrix cannot be solved. A light
+    /// whose optimization fails is not an error: it keeps its matrix
+    /// ([`LoopFrame::failed`]).
+    pub fn frame(&mut self, renderer: &mut Renderer, view: &LoopView<'_>) -> Result<LoopFrame, LoopError> {
+        let analyses = self.policy.analyses();
+        let optimizing = Instant::now();
+        let (mut optimized, mut failed, mut fallbacks) = (0u32, 0u32, Vec::new());
+        let readback = if analyses { renderer.try_take_analysis() } else { None };
+        if let Some(r) = &readback {
+            // The samples belong to the camera the pass was rendered with.
+            for (i, samples) in r.samples_all(view.lights, view.bounds, view.map).into_iter().enumerate() {
+                match samples.and_then(|s| Ok(self.scheduler.update(i, &s, self.frame)?.fallback)) {
+                    Ok(fallback) => {
+                        optimized |= 1 << i;
+                        fallbacks.extend(fallback.map(|f| (i, f)));
+                    }
+                    Err(_) => failed |= 1 << i,
+                }
+            }
+        }
+        let readback = readback.map(|r| ReadbackInfo { frame: r.frame, latency: r.latency, focused: r.tag });
+        let optimize_time = optimizing.elapsed();
+
+        let solving = Instant::now();
+        let matrices = match &self.policy {
+            LoopPolicy::Fixed(how) | LoopPolicy::FixedWithAnalysis(how) => view.solve(view.map, how)?,
+            LoopPolicy::Optimized => {
+                // Focused until the optimizer has reached a light.
+                let mut matrices = Vec::with_capacity(view.lights.len());
+                for (i, &light) in view.lights.iter().enumerate() {
+                    matrices.push(match self.scheduler.matrix(i) {
+                        Some(m) => *m,
+                        None => view.solve_one(light, view.map, &Parameterization::Focused)?,
+                    });
+                }
+                matrices
+            }
+        };
+        let plan = if analyses { self.scheduler.plan(self.frame).analysis } else { None };
+        // Small focused maps for the lights whose turn it is; the rest reuse
+        // the frame's maps.
+        let mut analysis_lights = Vec::new();
+        if let Some(plan) = plan.filter(|p| p.focused != 0) {
+            let size = self.scheduler.focused_analysis_size(view.map);
+            for (i, &light) in view.lights.iter().enumerate() {
+                analysis_lights.push(if plan.is_focused(i) {
+                    view.solve_one(light, size, &Parameterization::Focused)?
+                } else {
+                    matrices[i]
+                });
+            }
+        }
+        let solve_time = solving.elapsed();
+
+        let analysis = plan.map(|plan| AnalysisRequest {
+            lights: (!analysis_lights.is_empty()).then_some(&analysis_lights[..]),
+            tag: plan.focused,
+        });
+        let render = renderer.render(&Frame {
+            camera: view.camera,
+            lights: &matrices,
+            masks: false,
+            analysis,
+            lookup: self.lookup,
+        })?;
+        self.frame += 1;
+        Ok(LoopFrame { matrices, render, readback, optimized, failed, fallbacks, optimize_time, solve_time })
+    }
+
+    /// The loop at a fixed view, as in a walkthrough that pauses: starting
+    /// from focused matrices, each frame renders an analysis pass with the
+    /// current matrices in their own maps, waits for its readback and
+    /// optimizes every light; it stops when no light's optimizer moved its
+    /// matrix any more (no 20% median improvement) or one fell back, or
+    /// after `max_frames`. Blocks; the policy does not matter.
+    ///
+    /// # Errors
+    /// Renderer failures, and a light whose matrix cannot be solved or whose
+    /// readback cannot be optimized.
+    pub fn settle(
+        &mut self,
+        renderer: &mut Renderer,
+        view: &LoopView<'_>,
+        max_frames: usize,
+    ) -> Result<Settled, LoopError> {
+        for (i, m) in view.solve(view.map, &Parameterization::Focused)?.into_iter().enumerate() {
+            self.scheduler.set_matrix(i, m);
+        }
+        let current = |s: &ShadowScheduler| -> Vec<LightMatrix> {
+            (0..view.lights.len()).filter_map(|i| s.matrix(i).copied()).collect()
+        };
+        let max_frames = max_frames.max(1);
+        for frame in 1..=max_frames {
+            let matrices = current(&self.scheduler);
+            let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
+            let report = renderer.render(&Frame {
+                camera: view.camera,
+                lights: &matrices,
+                masks: false,
+                analysis,
+                lookup: self.lookup,
+            })?;
+            self.frame += 1;
+            renderer.wait_for(&report.submission)?;
+            let readback = loop {
+                if let Some(r) = renderer.try_take_analysis() {
+                    break r;
+                }
+                renderer.wait_idle()?;
+            };
+            let mut fallbacks = Vec::with_capacity(view.lights.len());
+            let mut moved = false;
+            for (i, samples) in readback.samples_all(view.lights, view.bounds, view.map).into_iter().enumerate() {
+                let report = self.scheduler.update(i, &samples?, self.frame)?;
+                moved |= report.accepted && report.fallback.is_none();
+                fallbacks.push(report.fallback);
+            }
+            if !moved || fallbacks.iter().any(Option::is_some) {
+                return Ok(Settled { matrices: current(&self.scheduler), frames: frame, fallbacks });
+            }
+        }
+        let fallbacks = vec![None; view.lights.len()];
+        Ok(Settled { matrices: current(&self.scheduler), frames: max_frames, fallbacks })
+    }
+}

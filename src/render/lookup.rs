@@ -1,0 +1,370 @@
+//! Shadow lookup modes: how the camera and analysis passes decide that a
+//! point is in a light's shadow, together with the map format and the
+//! shadow pass that lookup needs.
+//!
+//! The lookup is a value ([`ShadowLookup`], chosen per frame in
+//! [`Frame::lookup`](super::Frame::lookup)) so that a new mode is one
+//! variant here, its WGSL files and its map format, while the frame loop,
+//! the scheduler and the experiment's counting stay as they are: every mode
+//! ends in the same per-light shadow bit (`in_shadow` in its lookup WGSL),
+//! which the camera pass writes into the masks and the analysis pass into
+//! the readback the optimizer reads. A mode's pipelines and maps are built
+//! the first time a frame asks for it. See ARCHITECTURE.md, "Lookup modes".
+
+use std::borrow::Cow;
+
+use super::passes::{AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SHADOW_SLOTS};
+use super::uniforms::{ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
+
+/// How the camera and analysis passes look a point up in a light's map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ShadowLookup {
+    /// The standard hard shadow test: one linear light depth per texel
+    /// (`shaders/shadow.wgsl`), compared at the texel the point falls in
+    /// (`shaders/lookup_depth_compare.wgsl`).
+    #[default]
+    DepthCompare,
+}
+
+impl ShadowLookup {
+    /// Every lookup mode.
+    pub const ALL: [ShadowLookup; 1] = [ShadowLookup::DepthCompare];
+
+    /// A short stable name (for file names, CSV and logs).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::DepthCompare => "depth-compare",
+        }
+    }
+
+    /// The three parts a mode provides.
+    fn spec(self) -> LookupSpec {
+        match self {
+            Self::DepthCompare => LookupSpec {
+                map_color: None,
+                shadow_wgsl: include_str!("../../shaders/shadow.wgsl"),
+                lookup_wgsl: include_str!("../../shaders/lookup_depth_compare.wgsl"),
+            },
+        }
+    }
+}
+
+/// What a lookup mode adds to the renderer.
+struct LookupSpec {
+    /// The map format: every mode has a `Depth32Float` array (the shadow
+    /// pass's depth test and [`Renderer::read_shadow_map`](super::Renderer::read_shadow_map));
+    /// a mode that stores more per texel (e.g. a triangle) names the format
+    /// of a colour array written next to it (shadow-pass target 0, bound at
+    /// group 1 binding 1 of the camera and analysis passes).
+    map_color: Option<wgpu::TextureFormat>,
+    /// The shadow pass: `vs_shadow` and `fs_shadow`, after
+    /// `shaders/light_depth.wgsl`, reading `ShadowPass` (uniforms.rs) at
+    /// group 0 binding 0 with one dynamic-offset slot per map.
+    shadow_wgsl: &'static str,
+    /// The lookup: its group-1 bindings and `fn in_shadow(light: Light,
+    /// world: vec3<f32>) -> bool`, together with `shaders/common.wgsl`.
+    lookup_wgsl: &'static str,
+}
+
+/// Whether a shadow pass clips depth at the light's near and far planes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DepthClip {
+    /// The usual clipping (and the only mode without `DEPTH_CLIP_CONTROL`).
+    Clipped,
+    /// Casters nearer than the near plane rasterize, clamped to depth 0.
+    Unclipped,
+}
+
+/// One lookup mode's pipelines and maps.
+pub(crate) struct LookupState {
+    pub(crate) lookup: ShadowLookup,
+    pub(crate) shadow: ShadowPass,
+    pub(crate) camera: CameraPass,
+    pub(crate) analysis: AnalysisPass,
+    maps_layout: wgpu::BindGroupLayout,
+    map_color: Option<wgpu::TextureFormat>,
+    pub(crate) maps: ShadowMaps,
+}
+
+impl LookupState {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        lookup: ShadowLookup,
+        layouts: &SceneLayouts,
+        unclipped_available: bool,
+    ) -> Self {
+        let spec = lookup.spec();
+        // Depth bound as unfilterable float: `textureLoad` from a
+        // `texture_depth_*` has no GLSL translation (GL backend).
+        let mut entries = vec![map_entry(0, wgpu::TextureSampleType::Float { filterable: false })];
+        if let Some(format) = spec.map_color {
+            let sample_type = format.sample_type(None, None).unwrap_or(wgpu::TextureSampleType::Uint);
+            entries.push(map_entry(1, sample_type));
+        }
+        let maps_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(&format!("lixel {} maps layout", lookup.name())),
+            entries: &entries,
+        });
+        let scene_source = |pass: &str| {
+            // WGSL has no includes: the shared declarations are prepended.
+            let source = format!(
+                "{}{}{}{pass}",
+                include_str!("../../shaders/light_depth.wgsl"),
+                include_str!("../../shaders/common.wgsl"),
+                spec.lookup_wgsl
+            );
+            wgpu::ShaderSource::Wgsl(Cow::Owned(source))
+        };
+        let module = |label: String, source| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(&label), source })
+        };
+        let camera_module = module(
+            format!("lixel camera shader ({})", lookup.name()),
+            scene_source(include_str!("../../shaders/camera.wgsl")),
+        );
+        let analysis_module = module(
+            format!("lixel analysis shader ({})", lookup.name()),
+            scene_source(include_str!("../../shaders/analysis.wgsl")),
+        );
+        let shadow_source = format!("{}{}", include_str!("../../shaders/light_depth.wgsl"), spec.shadow_wgsl);
+        let shadow_module = module(
+            format!("lixel shadow shader ({})", lookup.name()),
+            wgpu::ShaderSource::Wgsl(Cow::Owned(shadow_source)),
+        );
+        Self {
+            lookup,
+            shadow: ShadowPass::new(device, &shadow_module, spec.map_color, unclipped_available),
+            camera: CameraPass::new(device, &layouts.camera, &maps_layout, &camera_module),
+            analysis: AnalysisPass::new(device, &layouts.analysis, &maps_layout, &analysis_module),
+            maps: ShadowMaps::new(device, &maps_layout, spec.map_color, 1, 1, 1),
+            maps_layout,
+            map_color: spec.map_color,
+        }
+    }
+
+    /// Grows the maps to hold `layers` maps of up to `width x height`.
+    pub(crate) fn ensure_maps(&mut self, device: &wgpu::Device, width: u32, height: u32, layers: u32) {
+        let maps = &self.maps;
+        if width > maps.width || height > maps.height || layers > maps.layers() {
+            self.maps = ShadowMaps::new(
+                device,
+                &self.maps_layout,
+                self.map_color,
+                width.max(maps.width),
+                height.max(maps.height),
+                layers.max(maps.layers()),
+            );
+        }
+    }
+}
+
+fn map_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// The shadow pass of one lookup mode: six pipelines (depth clipped or
+/// unclipped x faces culled: none, front, back) sharing one uniform buffer
+/// with a slot per map.
+pub(crate) struct ShadowPass {
+    /// Indexed by `cull * 2 + unclipped` (`cull`: 0 none, 1 front, 2 back);
+    /// `None` for unclipped variants when the device lacks
+    /// `DEPTH_CLIP_CONTROL`.
+    pipelines: [Option<wgpu::RenderPipeline>; 6],
+    pub(crate) uniforms: wgpu::Buffer,
+    pub(crate) bind_group: wgpu::BindGroup,
+}
+
+impl ShadowPass {
+    fn new(
+        device: &wgpu::Device,
+        module: &wgpu::ShaderModule,
+        map_color: Option<wgpu::TextureFormat>,
+        unclipped_available: bool,
+    ) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lixel shadow bind group layout"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lixel shadow pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lixel shadow pass uniforms"),
+            size: SHADOW_SLOT_STRIDE * MAX_SHADOW_SLOTS as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lixel shadow bind group"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &uniforms,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
+                }),
+            }],
+        });
+        let targets = [map_color.map(wgpu::ColorTargetState::from)];
+        let targets: &[Option<wgpu::ColorTargetState>] = if map_color.is_some() { &targets } else { &[] };
+        let pipelines = std::array::from_fn(|k| {
+            let (cull, unclipped) = (k / 2, k % 2 == 1);
+            let cull_mode = [None, Some(wgpu::Face::Front), Some(wgpu::Face::Back)][cull];
+            (!unclipped || unclipped_available).then(|| {
+                let clip = if unclipped { "unclipped" } else { "clipped" };
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(&format!("lixel shadow pipeline ({clip}, cull {cull_mode:?})")),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_shadow"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(VertexRaw::position_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        // `ShadowFaces::Both` (no culling) by default: meshes from
+                        // OBJ files need not be closed or consistently wound.
+                        cull_mode,
+                        unclipped_depth: unclipped,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        // Linear light depth grows away from the light for
+                        // every matrix, so the ordinary test always applies.
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: wgpu::StencilState::default(),
+                        // The bias is applied in fs_shadow, on linear depth.
+                        bias: wgpu::DepthBiasState::default(),
+                    }),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some("fs_shadow"),
+                        compilation_options: Default::default(),
+                        targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+        });
+        Self { pipelines, uniforms, bind_group }
+    }
+
+    /// The pipeline for a map; unclipped depth falls back to clipped when
+    /// the device cannot do it (the returned value says which was used).
+    pub(crate) fn pipeline(&self, clip: DepthClip, cull: Option<wgpu::Face>) -> (&wgpu::RenderPipeline, DepthClip) {
+        let cull = match cull {
+            None => 0,
+            Some(wgpu::Face::Front) => 1,
+            Some(wgpu::Face::Back) => 2,
+        };
+        let clipped = self.pipelines[cull * 2].as_ref().expect("clipped pipelines always exist");
+        match (clip, &self.pipelines[cull * 2 + 1]) {
+            (DepthClip::Unclipped, Some(p)) => (p, DepthClip::Unclipped),
+            _ => (clipped, DepthClip::Clipped),
+        }
+    }
+}
+
+/// Every map of one frame: one layer each of a depth texture array (plus
+/// the mode's colour array, if any) whose layers are as large as the
+/// largest map (each map uses the top-left `width x height` texels of its
+/// layer), and the group-1 bind group of the camera and analysis passes.
+pub(crate) struct ShadowMaps {
+    pub(crate) depth_array: wgpu::TextureView,
+    pub(crate) depth_layers: Vec<wgpu::TextureView>,
+    pub(crate) color_layers: Vec<wgpu::TextureView>,
+    pub(crate) bind_group: wgpu::BindGroup,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+}
+
+impl ShadowMaps {
+    fn new(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        color: Option<wgpu::TextureFormat>,
+        width: u32,
+        height: u32,
+        layers: u32,
+    ) -> Self {
+        // At least two layers: the GL backend makes a one-layer texture a
+        // plain 2D texture, which then reads as zero through the array view.
+        let layers = layers.max(2);
+        let array = |label: &str, format| {
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let array_view = texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some(&format!("{label} array view")),
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            });
+            let layer_views = (0..layers)
+                .map(|layer| {
+                    texture.create_view(&wgpu::TextureViewDescriptor {
+                        label: Some(&format!("{label} layer {layer}")),
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: layer,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    })
+                })
+                .collect::<Vec<_>>();
+            (texture, array_view, layer_views)
+        };
+        let (_, depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
+        let color = color.map(|format| array("lixel shadow map words", format));
+        let mut entries =
+            vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&depth_array) }];
+        if let Some((_, view, _)) = &color {
+            entries.push(wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) });
+        }
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lixel shadow maps bind group"),
+            layout,
+            entries: &entries,
+        });
+        let color_layers = color.map(|(_, _, layers)| layers).unwrap_or_default();
+        Self { depth_array, depth_layers, color_layers, bind_group, width, height }
+    }
+
+    pub(crate) fn layers(&self) -> u32 {
+        self.depth_layers.len() as u32
+    }
+}
