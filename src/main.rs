@@ -91,7 +91,7 @@ struct ExperimentArgs {
     /// Square shadow-map resolution.
     #[arg(long)]
     map: Option<u32>,
-    /// Comma-separated methods: normal, focused, lispsm, psm, plane-optimal, optimized, optimized-argmin.
+    /// Comma-separated methods: normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized, optimized-argmin.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Ground truth.
@@ -109,6 +109,13 @@ struct ExperimentArgs {
     /// Measure the frame-time table (the paper's Table 2) instead.
     #[arg(long)]
     timing: bool,
+    /// Measure temporal stability (flicker along a scripted camera walk)
+    /// instead: stability.csv, stability.md and SVG plots in --out.
+    #[arg(long, conflicts_with = "timing")]
+    stability: bool,
+    /// Frames of the --stability camera path (default: 120, quick preset 12).
+    #[arg(long)]
+    stability_frames: Option<usize>,
     /// Frames timed per pipeline and cell of the timing table (rounded up to
     /// whole 15-frame blocks).
     #[arg(long, default_value_t = 60)]
@@ -249,6 +256,22 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let gpu = gpu(args.backend)?;
     let (device, queue) = (&gpu.device, &gpu.queue);
     eprintln!("adapter: {}", gpu.describe());
+    if args.stability {
+        let mut path = experiment::stability::CameraPath::preset(args.preset);
+        path.frames = args.stability_frames.unwrap_or(path.frames);
+        eprintln!("stability: {} methods x {} frames...", config.methods.len(), path.frames);
+        let quiet = args.quiet;
+        let mut progress = |done: usize, total: usize| {
+            if !quiet && (done % 10 == 0 || done == total) {
+                eprintln!("  {done}/{total} frames");
+            }
+        };
+        let rows =
+            experiment::stability::measure(&config, &path, device, queue, &mut progress).map_err(|e| e.to_string())?;
+        let md = experiment::stability::write_report(&config.out, &config, &path, &rows).map_err(|e| e.to_string())?;
+        println!("{md}\n(written to {})", config.out.display());
+        return Ok(());
+    }
     if args.timing {
         let options = TimingOptions {
             frames: args.timing_frames,

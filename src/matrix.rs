@@ -18,6 +18,9 @@ pub enum Method {
     Normal,
     /// Uniform map limited to what the view frustum can see.
     Focused,
+    /// Focused with world-fixed axes and a texel-snapped grid (engines'
+    /// stabilization).
+    FocusedSnapped,
     /// Perspective shadow maps (Stamminger & Drettakis 2002).
     Psm,
     /// Light-space perspective shadow maps (Wimmer et al. 2004).
@@ -36,6 +39,7 @@ impl Method {
         match self {
             Self::Normal => "normal",
             Self::Focused => "focused",
+            Self::FocusedSnapped => "focused-snapped",
             Self::Psm => "psm",
             Self::LiSpsm => "lispsm",
             Self::PlaneOptimal => "plane-optimal",

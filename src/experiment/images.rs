@@ -11,10 +11,11 @@ use super::{light_for, Counts, ExperimentConfig, ExperimentError, MethodKind, Ru
 use crate::mesh::ShadowMasks;
 
 /// Line colour of each method in the plots.
-fn color(method: MethodKind) -> Rgba<u8> {
+pub(super) fn method_color(method: MethodKind) -> Rgba<u8> {
     match method {
         MethodKind::Normal => Rgba([120, 120, 120, 255]),
         MethodKind::Focused => Rgba([31, 119, 180, 255]),
+        MethodKind::FocusedSnapped => Rgba([23, 190, 207, 255]),
         MethodKind::LiSpsm => Rgba([44, 160, 44, 255]),
         MethodKind::Psm => Rgba([148, 103, 189, 255]),
         MethodKind::PlaneOptimal => Rgba([255, 127, 14, 255]),
@@ -30,7 +31,7 @@ pub(super) fn legend(config: &ExperimentConfig) -> String {
         .methods
         .iter()
         .map(|&m| {
-            let [r, g, b, _] = color(m).0;
+            let [r, g, b, _] = method_color(m).0;
             format!("{} = rgb({r}, {g}, {b})", m.name())
         })
         .collect();
@@ -100,17 +101,17 @@ pub(super) fn sorted_curves(path: &Path, config: &ExperimentConfig, rows: &[Conf
             (x, y)
         };
         for i in 1..v.len() {
-            line(&mut img, point(i - 1, v[i - 1]), point(i, v[i]), color(*m));
+            line(&mut img, point(i - 1, v[i - 1]), point(i, v[i]), method_color(*m));
         }
         if v.len() == 1 {
-            line(&mut img, point(0, v[0]), point(0, v[0]), color(*m));
+            line(&mut img, point(0, v[0]), point(0, v[0]), method_color(*m));
         }
     }
     // A colour key in the top-left corner, in method order.
     for (k, (m, _)) in series.iter().enumerate() {
         let x = margin + 10 + 30 * k as i64;
         for dy in 0..12 {
-            line(&mut img, (x, margin + dy), (x + 20, margin + dy), color(*m));
+            line(&mut img, (x, margin + dy), (x + 20, margin + dy), method_color(*m));
         }
     }
     save(&img, path)

@@ -18,6 +18,7 @@
 pub mod framing;
 mod images;
 mod report;
+pub mod stability;
 mod timing;
 
 use std::path::PathBuf;
@@ -47,6 +48,8 @@ pub enum MethodKind {
     Normal,
     /// Uniform around the visible receivers.
     Focused,
+    /// Focused with world-fixed axes and a texel-snapped grid.
+    FocusedSnapped,
     /// Light-space perspective.
     LiSpsm,
     /// Perspective shadow maps (near plane from the nearest visible depth).
@@ -61,9 +64,10 @@ pub enum MethodKind {
 
 impl MethodKind {
     /// Every method, in report order.
-    pub const ALL: [Self; 7] = [
+    pub const ALL: [Self; 8] = [
         Self::Normal,
         Self::Focused,
+        Self::FocusedSnapped,
         Self::LiSpsm,
         Self::Psm,
         Self::PlaneOptimal,
@@ -77,6 +81,7 @@ impl MethodKind {
         match self {
             Self::Normal => Method::Normal,
             Self::Focused => Method::Focused,
+            Self::FocusedSnapped => Method::FocusedSnapped,
             Self::LiSpsm => Method::LiSpsm,
             Self::Psm => Method::Psm,
             Self::PlaneOptimal => Method::PlaneOptimal,
@@ -545,6 +550,7 @@ impl<'a> Runner<'a> {
         let p = match method {
             MethodKind::Normal => Parameterization::Normal,
             MethodKind::Focused => Parameterization::Focused,
+            MethodKind::FocusedSnapped => Parameterization::FocusedSnapped(Default::default()),
             MethodKind::LiSpsm => Parameterization::LiSpsm(Default::default()),
             MethodKind::Psm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
             MethodKind::PlaneOptimal => Parameterization::PlaneOptimal(Default::default()),

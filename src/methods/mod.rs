@@ -3,6 +3,7 @@
 //! affine fit and the depth row are shared (see [`crate::matrix`]).
 
 pub(crate) mod focused;
+mod focused_snapped;
 mod lispsm;
 mod normal;
 mod plane_optimal;
@@ -16,6 +17,7 @@ use crate::light::LightFrame;
 use crate::matrix::{LightMatrix, Method};
 use crate::problem::ShadowProblem;
 
+pub use focused_snapped::FocusedSnappedOptions;
 pub use lispsm::{LiSpsmOptions, NOpt};
 pub use plane_optimal::PlaneOptimalOptions;
 pub use psm::{psm_light_case, PsmLightCase, PsmOptions};
@@ -28,6 +30,9 @@ pub enum Parameterization {
     Normal,
     /// Uniform map around the receivers the view frustum can see.
     Focused,
+    /// The focused map with world-fixed axes and a snapped texel grid (what
+    /// engines ship against shimmering).
+    FocusedSnapped(FocusedSnappedOptions),
     /// Perspective shadow maps.
     Psm(PsmOptions),
     /// Light-space perspective shadow maps.
@@ -38,9 +43,10 @@ pub enum Parameterization {
 
 impl Parameterization {
     /// Every classical method with default options, in the papers' order.
-    pub const ALL_DEFAULT: [Self; 5] = [
+    pub const ALL_DEFAULT: [Self; 6] = [
         Self::Normal,
         Self::Focused,
+        Self::FocusedSnapped(FocusedSnappedOptions::DEFAULT),
         Self::Psm(PsmOptions::DEFAULT),
         Self::LiSpsm(LiSpsmOptions::DEFAULT),
         Self::PlaneOptimal(PlaneOptimalOptions::DEFAULT),
@@ -52,6 +58,7 @@ impl Parameterization {
         match self {
             Self::Normal => Method::Normal,
             Self::Focused => Method::Focused,
+            Self::FocusedSnapped(_) => Method::FocusedSnapped,
             Self::Psm(_) => Method::Psm,
             Self::LiSpsm(_) => Method::LiSpsm,
             Self::PlaneOptimal(_) => Method::PlaneOptimal,
@@ -63,6 +70,7 @@ pub(crate) fn solve(problem: &ShadowProblem, parameterization: &Parameterization
     match parameterization {
         Parameterization::Normal => normal::solve(problem),
         Parameterization::Focused => focused::solve(problem),
+        Parameterization::FocusedSnapped(options) => focused_snapped::solve(problem, options),
         Parameterization::Psm(options) => psm::solve(problem, options),
         Parameterization::LiSpsm(options) => lispsm::solve(problem, options),
         Parameterization::PlaneOptimal(options) => plane_optimal::solve(problem, options),
