@@ -233,7 +233,9 @@ pub fn measure(
             let matrix = match &mut source {
                 Source::Fixed(kind) => {
                     let problem = runner.problem(light, config.map)?;
-                    runner.matrix(*kind, &problem, None)?.0
+                    // PSM's near plane from the frame's nearest visible depth, as in the main experiment.
+                    let nearest = super::nearest_view_depth(camera, &truths[f]);
+                    runner.matrix(*kind, &problem, nearest)?.0
                 }
                 Source::Loop(shadows) => {
                     let view =
