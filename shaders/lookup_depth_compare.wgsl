@@ -8,8 +8,8 @@
 // becomes the light's shadow bit in the masks and the analysis readback.
 
 // One layer per shadow-pass slot (`light.layer`), as large as the largest map.
-// Depth bound as an unfilterable float texture: naga cannot translate
-// `textureLoad` from a depth texture to GLSL (the GL backend).
+// Depth textures are bound as unfilterable float textures: naga cannot
+// translate `textureLoad` from a depth texture to GLSL (the GL backend).
 @group(1) @binding(0) var shadow_maps: texture_2d_array<f32>;
 
 // Hard shadow test of `world` against the light's map. Points outside the

@@ -22,11 +22,32 @@ pub enum LixelError {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// An engine's camera matrices cannot be one camera: `property` says
+    /// which property failed ([`Camera::from_matrices`](crate::Camera::from_matrices)).
+    #[error("invalid camera matrices ({property}): {reason}")]
+    InvalidProjection {
+        /// The property that failed.
+        property: crate::conventions::CameraProperty,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// The light cannot be used (zero direction, spot cone of 90 degrees or more, ...).
     #[error("invalid light: {reason}")]
     InvalidLight {
         /// What is wrong with it.
         reason: &'static str,
+    },
+    /// A finite input coordinate lies beyond the supported range
+    /// `|x| <= MAX_COORDINATE` ([`crate::MAX_COORDINATE`], `1e15`): squares
+    /// of such values overflow or swamp the scene in rounding error.
+    #[error("{what} has a coordinate of magnitude {magnitude:e}, beyond the supported {limit:e}")]
+    OutOfRange {
+        /// Which input held the value.
+        what: &'static str,
+        /// Its largest absolute coordinate.
+        magnitude: f64,
+        /// The supported limit.
+        limit: f64,
     },
     /// Scene bounds are empty or inverted.
     #[error("invalid scene bounds: {reason}")]
@@ -66,14 +87,17 @@ pub enum LixelError {
         method: Method,
     },
     /// No optical axis puts every relevant point safely in front of the
-    /// light (an internal invariant of the method failed; please report it).
+    /// light, or the finished matrix (checked in world coordinates) would not
+    /// hold them: an internal invariant of the method failed; please report it.
     #[error("{method:?}: relevant points lie behind the light's image plane")]
     NotInFront {
         /// The method that was asked for.
         method: Method,
     },
-    /// The receiver plane given to the plane-optimal method is invalid or
-    /// contains the eye.
+    /// The receiver plane given to the plane-optimal method is invalid
+    /// (non-finite, zero normal) or its options are (`min_relative_w` outside
+    /// `(0, 1)`). An eye in the plane is not an error: the method falls back
+    /// with [`Fallback::PlaneDegenerate`](crate::Fallback::PlaneDegenerate).
     #[error("invalid receiver plane: {reason}")]
     InvalidPlane {
         /// What is wrong with it.
@@ -89,6 +113,17 @@ pub enum LixelError {
 
 /// Result alias used throughout the crate.
 pub type Result<T, E = LixelError> = std::result::Result<T, E>;
+
+/// Returns `Err(OutOfRange)` when a coordinate's magnitude exceeds
+/// [`crate::MAX_COORDINATE`] (after [`check_finite`]).
+pub(crate) fn check_range(values: &[f64], what: &'static str) -> Result<()> {
+    let magnitude = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if magnitude <= crate::tolerance::MAX_COORDINATE {
+        Ok(())
+    } else {
+        Err(LixelError::OutOfRange { what, magnitude, limit: crate::tolerance::MAX_COORDINATE })
+    }
+}
 
 /// Returns `Err(NonFinite)` unless every component is finite.
 pub(crate) fn check_finite(values: &[f64], what: &'static str) -> Result<()> {

@@ -26,8 +26,13 @@
 //! Start with [`ShadowProblem`].
 //!
 //! ## Conventions
-//! wgpu's: right-handed world, clip depth in `[0, 1]`, NDC `y` up, framebuffer
-//! row 0 at the top. All solver arithmetic is in `f64`;
+//! Inside, wgpu's: right-handed view space, clip depth in `[0, 1]`, NDC `y`
+//! up, framebuffer row 0 at the top. In: [`Camera::from_matrices`] reads an
+//! engine's own matrices (GL `[-1, 1]` depth, reverse-Z, infinite far,
+//! orthographic, jittered, left-handed, `y`-down) and
+//! [`optimize::ReadbackLayout`] its readback; out:
+//! [`LightMatrix::in_convention`] gives the matrix for the engine's shadow
+//! pass. See [`conventions`]. All solver arithmetic is in `f64`;
 //! [`LightMatrix::clip_from_world_f32`] converts for upload.
 //!
 //! ## Features
@@ -41,6 +46,7 @@
 #![warn(missing_docs)]
 
 mod camera;
+pub mod conventions;
 mod error;
 #[cfg(feature = "cli")]
 pub mod experiment;
@@ -60,7 +66,7 @@ pub mod score;
 pub mod synthetic;
 mod tolerance;
 
-pub use camera::Camera;
+pub use camera::{Camera, INFINITE_FAR_CORNER_RATIO};
 pub use error::{LixelError, Result};
 pub use light::{Light, LightFrame};
 pub use matrix::{light_distance, DepthRange, Fallback, LightDistance, LightMatrix, Method};
@@ -71,4 +77,4 @@ pub use methods::{
 pub use optimize::{optimize_light_matrix, OptimizeOptions, OptimizeReport, Optimized, Optimizer, Samples};
 pub use problem::ShadowProblem;
 pub use scene::{Aabb, SceneBounds, ShadowMapSize};
-pub use tolerance::Tolerances;
+pub use tolerance::{Tolerances, MAX_COORDINATE, MAX_LIGHTS};

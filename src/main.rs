@@ -37,14 +37,6 @@ enum Command {
     Methods(MethodsArgs),
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum UpArg {
-    /// +y up (OBJ's usual convention, glTF's rule).
-    Y,
-    /// +z up (CAD tools, many scans).
-    Z,
-}
-
 #[derive(clap::Args)]
 struct ExperimentArgs {
     /// Starting point for every setting below.
@@ -59,7 +51,7 @@ struct ExperimentArgs {
     scene: Option<PathBuf>,
     /// The --scene file's up axis (z: converted to the y-up world).
     #[arg(long, value_enum, default_value = "y")]
-    up: UpArg,
+    up: UpAxis,
     /// Uniform scale applied to the --scene file.
     #[arg(long, default_value_t = 1.0)]
     scale: f64,
@@ -178,11 +170,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     let mut c = ExperimentConfig::preset(args.preset);
     c.light = args.light.unwrap_or(c.light);
     if let Some(path) = &args.scene {
-        let up = match args.up {
-            UpArg::Y => UpAxis::Y,
-            UpArg::Z => UpAxis::Z,
-        };
-        let options = SceneOptions { up, scale: args.scale, floor: !args.no_floor };
+        let options = SceneOptions { up: args.up, scale: args.scale, floor: !args.no_floor };
         c.scene = SceneSource::File { path: path.clone(), options };
     } else if let Some(t) = args.triangles {
         c.scene = SceneSource::Builtin { triangles: t };

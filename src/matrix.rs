@@ -76,13 +76,23 @@ pub enum Fallback {
         blend: f64,
     },
     /// Plane-optimal: the eye or the light lies in the receiver plane, so the
-    /// plane's homography is singular; the focused map was used.
+    /// plane's homography is singular, or the light grazes the plane so
+    /// closely that the map cannot be held in `f64`; the focused map was used.
     PlaneDegenerate,
     /// Plane-optimal: the view frustum sees no part of the receiver plane
     /// inside the receiver bounds; the focused map was used.
     PlaneNotVisible,
-    /// Scene-optimized: no usable samples; the focused map was used.
+    /// Scene-optimized: no usable samples, or no candidate map held every
+    /// relevant sample (rounding at grazing axes); the focused map was used.
+    /// It holds the visible receivers `V ∩ R ∩ L`; relevant samples outside
+    /// them (which a correct readback does not produce) are not guaranteed.
     NoUsableSamples,
+    /// PSM or LiSPSM with an orthographic camera: both methods counter the
+    /// camera's perspective, and without one their warp vanishes (PSM's
+    /// post-perspective space is an affine image of the world; LiSPSM's
+    /// `n_opt` grows without bound as the eye recedes), so the focused
+    /// (uniform) map is the method's own limit.
+    OrthographicCamera,
 }
 
 /// How depth is stored, with the range it covers.
@@ -239,8 +249,10 @@ pub(crate) struct AxisFit<'a> {
 
 /// The homography `G` (NDC units, unit `j`) for optical axis `axis` that fits
 /// the map around the light-coordinate points `xs`, or `None` when a point is
-/// not safely in front of the light (see [`Tolerances::min_front_cosine`]) or
-/// the fit fails. `scratch` is reused for the projected points.
+/// not safely in front of the light (see [`Tolerances::min_front_cosine`]),
+/// the fit fails, or the fitted map does not hold every point to within
+/// [`Tolerances::coverage_slack`] (rounding, for axes that see a point at a
+/// grazing angle). `scratch` is reused for the projected points.
 pub(crate) fn fit_homography(
     setup: &AxisFit<'_>,
     axis: DVec3,
@@ -249,21 +261,35 @@ pub(crate) fn fit_homography(
     scratch: &mut Vec<DVec2>,
 ) -> Option<DMat3> {
     let j = axis.normalize();
-    if !j.is_finite() || xs.is_empty() {
-        return None;
-    }
-    let cos_min = setup.tolerances.min_front_cosine;
-    if setup.frame.is_orthographic() {
-        let max_w = xs.iter().map(|x| j.dot(*x)).fold(0.0, f64::max);
-        if !xs.iter().all(|x| j.dot(*x) > cos_min * max_w) {
-            return None;
-        }
-    } else if !xs.iter().all(|x| j.dot(*x) > cos_min * x.length()) {
+    if !j.is_finite() || xs.is_empty() || !in_front(setup.frame, setup.tolerances, j, xs) {
         return None;
     }
     let (e1, e2) = project_to_image_plane(j, xs.iter().copied(), scratch).ok()?;
     let fit = workspace.fit(scratch, setup.map.width, setup.map.height, setup.fit).ok()?;
-    Some(fit.ndc_from_plane * DMat3::from_cols(e1, e2, j).transpose())
+    let homography = fit.ndc_from_plane * DMat3::from_cols(e1, e2, j).transpose();
+    holds_all(&homography, xs, setup.tolerances.coverage_slack).then_some(homography)
+}
+
+/// Whether every point `x` (light coordinates) has `w = j·x̂` above
+/// [`Tolerances::min_front_cosine`] times the largest `w`, with `x̂ = x / |x|`
+/// for a point light (a cosine to the axis) and `x̂ = x` for a directional
+/// one (whose `X~` all have third coordinate 1). Relative, so a far point
+/// light, whose points all sit within a tiny angle, is judged as the
+/// directional light it approaches.
+fn in_front(frame: &LightFrame, tolerances: &Tolerances, j: DVec3, xs: &[DVec3]) -> bool {
+    let w = |x: &DVec3| if frame.is_orthographic() { j.dot(*x) } else { j.dot(*x) / x.length() };
+    let max_w = xs.iter().map(w).fold(0.0, f64::max);
+    max_w > 0.0 && xs.iter().all(|x| w(x) > tolerances.min_front_cosine * max_w)
+}
+
+/// Whether `homography` puts every light-coordinate point in front of the
+/// light and inside the map (`|ndc| <= 1 + slack`).
+pub(crate) fn holds_all(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool {
+    homography.is_finite()
+        && xs.iter().all(|&x| {
+            let c = *homography * x;
+            c.z > 0.0 && c.x.abs() <= (1.0 + slack) * c.z && c.y.abs() <= (1.0 + slack) * c.z
+        })
 }
 
 /// Everything needed to turn an optical axis into a [`LightMatrix`].
@@ -288,7 +314,9 @@ impl Placement<'_> {
     ///
     /// # Errors
     /// [`LixelError::NotInFront`] when a focus point is not safely in front of
-    /// the light for this axis; [`LixelError::UnusableSamples`] when there
+    /// the light for this axis, or the finished matrix does not hold it in
+    /// the map and the depth range (to [`Tolerances::coverage_slack`]) in
+    /// world coordinates; [`LixelError::UnusableSamples`] when there
     /// are no focus points.
     pub(crate) fn build(&self, workspace: &mut FitWorkspace) -> Result<LightMatrix> {
         let xs: Vec<DVec3> = self.focus.iter().map(|&p| self.frame.homogeneous(p)).collect();
@@ -304,7 +332,20 @@ impl Placement<'_> {
             &mut scratch,
         )
         .ok_or(LixelError::NotInFront { method: self.method })?;
-        Ok(self.finish(homography, &xs))
+        let matrix = self.finish(homography, &xs);
+        // Checked again as a renderer will evaluate it, in world coordinates:
+        // composing `G` with a far light's translation can round differently.
+        let slack = self.tolerances.coverage_slack;
+        let held = |p: &DVec3| {
+            matrix.covers(*p, slack)
+                && matrix
+                    .project(*p)
+                    .is_some_and(|ndc| ndc.z <= 1.0 + slack && (ndc.z >= -slack || matrix.needs_unclipped_depth))
+        };
+        if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(held)) {
+            return Err(LixelError::NotInFront { method: self.method });
+        }
+        Ok(matrix)
     }
 
     /// Adds the depth row to a homography whose third row is the unit axis;
@@ -340,7 +381,9 @@ impl Placement<'_> {
                 let (lo, hi) = all_depth
                     .map(|p| d.dot(*p))
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
-                let span = (hi - lo).max(f64::MIN_POSITIVE.sqrt()).max(1e-12 * lo.abs().max(hi.abs()));
+                let span = (hi - lo)
+                    .max(f64::MIN_POSITIVE.sqrt())
+                    .max(self.tolerances.min_relative_span * lo.abs().max(hi.abs()));
                 let (c_min, c_max) = (lo - pad * span, hi + pad * span);
                 let w_min = focus_light.iter().map(|x| j.dot(*x)).fold(f64::INFINITY, f64::min);
                 let alpha = w_min / (c_max - c_min);
@@ -354,7 +397,7 @@ impl Placement<'_> {
             .chain(self.depth_points)
             .map(|&p| light_distance(&self.frame, p))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
-        let span = (hi - lo).max(1e-9 * lo.abs().max(hi.abs()).max(f64::MIN_POSITIVE));
+        let span = (hi - lo).max(self.tolerances.min_relative_span * lo.abs().max(hi.abs()).max(f64::MIN_POSITIVE));
         let light_distance = LightDistance { min: lo - pad * span, max: hi + pad * span };
         LightMatrix {
             clip_from_world,

@@ -4,12 +4,11 @@
 use glam::DVec3;
 
 use crate::camera::Camera;
-use crate::error::Result;
+use crate::error::{check_range, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::{ConvexPolyhedron, Plane};
 use crate::light::{Light, LightFrame};
 use crate::matrix::{Fallback, LightMatrix, Method, Placement};
-use crate::methods::{self, Parameterization};
 use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
 use crate::tolerance::Tolerances;
 
@@ -52,11 +51,20 @@ impl ShadowProblem {
     ///
     /// # Errors
     /// Whatever [`Light::validate`], [`SceneBounds::validate`] and
-    /// [`ShadowMapSize::validate`] report. A [`Camera`] is valid by construction.
+    /// [`ShadowMapSize::validate`] report, and
+    /// [`OutOfRange`](crate::LixelError::OutOfRange) when the eye, the light
+    /// or the bounds have a coordinate beyond [`MAX_COORDINATE`](crate::MAX_COORDINATE).
+    /// A [`Camera`] is otherwise valid by construction.
     pub fn new(camera: Camera, light: Light, bounds: SceneBounds, map: ShadowMapSize) -> Result<Self> {
         light.validate()?;
         bounds.validate()?;
         map.validate()?;
+        check_range(&camera.eye().to_array(), "camera eye")?;
+        if let Some(l) = light.position() {
+            check_range(&l.to_array(), "light position")?;
+        }
+        check_range(&[bounds.casters.min.to_array(), bounds.casters.max.to_array()].concat(), "caster bounds")?;
+        check_range(&[bounds.receivers.min.to_array(), bounds.receivers.max.to_array()].concat(), "receiver bounds")?;
         let scene = bounds.scene();
         let mut scale = scene.diagonal().max(scene.min.abs().max(scene.max.abs()).max_element() * 1e-6);
         if !(scale > 0.0) {
@@ -85,16 +93,6 @@ impl ShadowProblem {
     pub fn with_tolerances(mut self, tolerances: Tolerances) -> Self {
         self.tolerances = tolerances;
         self
-    }
-
-    /// Computes the light matrix of one parameterization.
-    ///
-    /// # Errors
-    /// See [`LixelError`](crate::LixelError); chiefly
-    /// [`LightInsideFocus`](crate::LixelError::LightInsideFocus) when a
-    /// point light sits inside the region its single map must cover.
-    pub fn solve(&self, parameterization: &Parameterization) -> Result<LightMatrix> {
-        methods::solve(self, parameterization)
     }
 
     /// The camera.
@@ -145,6 +143,45 @@ impl ShadowProblem {
         self.tolerances.plane_eps * self.scale
     }
 
+    /// Absolute [`Tolerances::coarse_eps`]: "on the receiver plane", "at the light".
+    #[must_use]
+    pub fn coarse_eps(&self) -> f64 {
+        self.tolerances.coarse_eps * self.scale
+    }
+
+    /// The vertices of `body` that have a direction from the light: all of
+    /// them for a directional light; for a point or spot light those farther
+    /// than [`Self::coarse_eps`] from it. A spot light's own apex is a vertex
+    /// of every body clipped by its frustum `L` when the light sits inside the
+    /// bounds; the directions to the remaining vertices span the body's
+    /// directions, so the map still holds all of it.
+    ///
+    /// A spot light's body that lies wholly within that distance (a body
+    /// below the solver's resolution, next to the light) is stood in for by
+    /// points on the corner rays of the spot's pyramid: the map then holds
+    /// the spot's whole frustum, which contains the body.
+    #[must_use]
+    pub fn mappable_vertices(&self, body: &ConvexPolyhedron) -> Vec<DVec3> {
+        let Some(l) = self.light.position() else {
+            return body.vertices().to_vec();
+        };
+        let at_light = self.coarse_eps();
+        let far: Vec<DVec3> = body.vertices().iter().copied().filter(|&p| (p - l).length() > at_light).collect();
+        match self.light {
+            Light::Spot { direction, .. } if far.is_empty() && !body.is_empty() => {
+                let planes = self.light_planes();
+                (0..planes.len())
+                    .filter_map(|k| {
+                        let ray = planes[k].normal.cross(planes[(k + 1) % planes.len()].normal).try_normalize()?;
+                        let ray = if ray.dot(direction) < 0.0 { -ray } else { ray };
+                        Some(l + ray * (2.0 * at_light))
+                    })
+                    .collect()
+            }
+            _ => far,
+        }
+    }
+
     /// The view frustum `V` as the six half-spaces of the camera's clip volume.
     #[must_use]
     pub fn view_planes(&self) -> Vec<Plane> {
@@ -157,10 +194,13 @@ impl ShadowProblem {
             .collect()
     }
 
-    /// The view frustum `V` as a polyhedron (may be huge for a far far plane).
+    /// The view frustum `V` as a polyhedron (may be huge for a far far plane;
+    /// an infinite far plane is cut just beyond the scene bounds, which are
+    /// always finite).
     #[must_use]
     pub fn view_body(&self) -> ConvexPolyhedron {
-        ConvexPolyhedron::from_frustum_corners(&self.camera.frustum_corners()).unwrap_or_else(ConvexPolyhedron::empty)
+        let corners = self.camera.frustum_corners_within(&self.bounds.scene());
+        ConvexPolyhedron::from_frustum_corners(&corners).unwrap_or_else(ConvexPolyhedron::empty)
     }
 
     /// The light's own frustum `L` as half-spaces: empty (everything) for
@@ -227,13 +267,20 @@ impl ShadowProblem {
 
     /// Half-spaces of `body` grown towards the light (hull with the light's
     /// position, or extrusion along the reversed light direction).
+    ///
+    /// Each is moved out by twice the plane tolerance: the bodies clipped by
+    /// them must *contain* what they stand for, and a clip drops what is at
+    /// most `eps` thick. A light in (or grazing) the plane of a flat receiver
+    /// (a sunset over a floor) makes `conv(focus ∪ l)` exactly such a sliver,
+    /// and its casters must still reach the depth row.
     fn towards_light_planes(&self, body: &ConvexPolyhedron) -> Vec<Plane> {
-        match self.light {
+        let planes = match self.light {
             Light::Directional { direction } => body.extrusion_planes(-direction, self.eps()),
             Light::Point { position } | Light::Spot { position, .. } => {
                 body.hull_with_point_planes(position, self.eps())
             }
-        }
+        };
+        planes.into_iter().map(|p| p.grown(2.0 * self.eps())).collect()
     }
 
     /// The light frame used for a body to be mapped: a spot light's own axis,
@@ -276,18 +323,38 @@ impl ShadowProblem {
         method: Method,
         fallback: Option<Fallback>,
     ) -> Result<LightMatrix> {
+        let points = self.mappable_vertices(focus);
+        // Depth covers the casters and all of `focus`, a vertex at the light
+        // included (then near is clamped and unclipped depth requested).
+        let mut depth_points = casters.vertices().to_vec();
+        depth_points.extend_from_slice(focus.vertices());
+        self.placement(frame, axis, &points, &depth_points, method, fallback).build(&mut FitWorkspace::default())
+    }
+
+    /// The one constructor of a [`Placement`] for this problem: its light,
+    /// map size, fit options and tolerances, with `focus` the world points
+    /// the map must hold and `depth_points` the further points (casters)
+    /// its depth range must hold.
+    pub(crate) fn placement<'a>(
+        &'a self,
+        frame: LightFrame,
+        axis: DVec3,
+        focus: &'a [DVec3],
+        depth_points: &'a [DVec3],
+        method: Method,
+        fallback: Option<Fallback>,
+    ) -> Placement<'a> {
         Placement {
             light: self.light,
             frame,
             axis,
-            focus: focus.vertices(),
-            depth_points: casters.vertices(),
+            focus,
+            depth_points,
             map: self.map,
             fit: &self.fit,
             tolerances: &self.tolerances,
             method,
             fallback,
         }
-        .build(&mut FitWorkspace::default())
     }
 }

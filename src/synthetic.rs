@@ -55,6 +55,7 @@ impl SyntheticReadback {
             depth: &self.depth,
             shadow_bits: &self.shadow_bits,
             normals: with_normals.then_some(&self.normals[..]),
+            layout: crate::optimize::ReadbackLayout::default(),
         }
     }
 }
@@ -135,7 +136,7 @@ impl SyntheticScene {
                 out.depth[i] = (clip.z / clip.w) as f32;
                 out.normals[i] = hit.normal.as_vec3().to_array();
                 let lift = p + hit.normal * (1e-7 * scale);
-                for (k, light) in lights.iter().take(32).enumerate() {
+                for (k, light) in lights.iter().take(crate::MAX_LIGHTS).enumerate() {
                     let (to, t_max) = match *light {
                         Light::Directional { direction } => (-direction, f64::INFINITY),
                         Light::Point { position } | Light::Spot { position, .. } => (position - lift, 1.0),

@@ -31,9 +31,16 @@ fn degenerate_cameras_are_rejected() {
     for (near, far) in [(0.0, 10.0), (-1.0, 10.0), (10.0, 10.0), (10.0, 1.0)] {
         assert!(matches!(ok(e, t, u, 1.0, vp, near, far), Err(LixelError::DegenerateCamera { .. })), "{near} {far}");
     }
-    // An orthographic projection is not a perspective camera.
+    // An orthographic projection is a camera too (issue 13); a projective
+    // w row of neither kind is not.
     let ortho = glam::dcamera::rh::proj::directx::orthographic(-1.0, 1.0, -1.0, 1.0, 0.1, 10.0);
-    assert!(Camera::from_matrices(DMat4::IDENTITY, ortho, vp).is_err());
+    assert!(Camera::from_matrices(DMat4::IDENTITY, ortho, vp).is_ok());
+    let mut skewed = ortho;
+    skewed.x_axis.w = 0.5;
+    assert!(matches!(
+        Camera::from_matrices(DMat4::IDENTITY, skewed, vp),
+        Err(LixelError::InvalidProjection { property: lixel::conventions::CameraProperty::ProjectionKind, .. })
+    ));
     // A view matrix that scales is not rigid.
     let persp = glam::dcamera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 10.0);
     assert!(Camera::from_matrices(DMat4::from_scale(DVec3::splat(2.0)), persp, vp).is_err());
@@ -80,14 +87,23 @@ fn bad_planes_and_readbacks_are_rejected() {
     ));
     let depth = vec![0.5f32; 16];
     let bits = vec![0u32; 15];
-    let short = Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None };
+    let short =
+        Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None, layout: Default::default() };
     assert!(Samples::from_readback(&p, &short, 0, &SampleOptions::default()).is_err());
     let bits = vec![0u32; 16];
-    let fine = Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None };
+    let fine =
+        Readback { width: 4, height: 4, depth: &depth, shadow_bits: &bits, normals: None, layout: Default::default() };
     assert!(Samples::from_readback(&p, &fine, 32, &SampleOptions::default()).is_err());
     // A readback of NaN depths is not an error: it simply has no samples.
     let nan_depth = vec![f32::NAN; 16];
-    let nans = Readback { width: 4, height: 4, depth: &nan_depth, shadow_bits: &bits, normals: None };
+    let nans = Readback {
+        width: 4,
+        height: 4,
+        depth: &nan_depth,
+        shadow_bits: &bits,
+        normals: None,
+        layout: Default::default(),
+    };
     let samples = Samples::from_readback(&p, &nans, 0, &SampleOptions::default()).unwrap();
     assert_eq!(samples.relevant_count(), 0);
     let result = lixel::optimize_light_matrix(&samples, None).unwrap();

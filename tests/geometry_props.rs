@@ -3,8 +3,6 @@
 //! Every loop is seeded, so failures reproduce; the case index is in each
 //! message. Set `LIXEL_STRESS=<factor>` to run that many times more cases.
 
-use std::collections::HashMap;
-
 use glam::{DMat3, DMat4, DVec3};
 use lixel::geometry::{default_eps, min_enclosing_cone, ConvexPolyhedron, Plane};
 use proptest::prelude::*;
@@ -77,45 +75,13 @@ fn random_body(rng: &mut impl Rng, s: f64) -> (ConvexPolyhedron, f64) {
     }
 }
 
-/// Structural invariants: closed, consistently oriented, index-shared,
-/// Euler characteristic 2, vertices on their face planes, planes outwards.
-///
-/// A face's vertices may lie further inside its plane than `tol` (up to
-/// `1e-6` of the body's size): where a plane through a sliver is
-/// ill-conditioned, the hull and extrusion push it out rather than let it cut
-/// the body.
+/// Structural invariants ([`ConvexPolyhedron::sanity_check`], shared with the
+/// unit tests) of a non-empty body.
 fn assert_closed(body: &ConvexPolyhedron, tol: f64, context: &str) {
-    let inner_tol = tol.max(1e-6 * body.scale());
     assert!(!body.is_empty(), "{context}: empty");
-    let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut used = vec![false; body.vertices().len()];
-    for (f, face) in body.faces().iter().enumerate() {
-        let indices = face.indices();
-        assert!(indices.len() >= 3, "{context}: face {f} has {} vertices", indices.len());
-        for (a, b) in face.edges() {
-            assert_ne!(a, b, "{context}: repeated vertex in face {f}");
-            assert!(edges.insert((a, b), f).is_none(), "{context}: directed edge {a}->{b} twice");
-            used[a] = true;
-        }
-        for &i in indices {
-            let d = face.plane().signed_distance(body.vertices()[i]);
-            assert!(-inner_tol <= d && d <= tol, "{context}: vertex {i} is {d} off face {f}");
-        }
-        assert!((face.plane().normal.length() - 1.0).abs() < 1e-12, "{context}: normal not unit");
+    if let Err(e) = body.sanity_check(tol) {
+        panic!("{context}: {e}");
     }
-    for &(a, b) in edges.keys() {
-        assert!(edges.contains_key(&(b, a)), "{context}: edge {a}->{b} has one face");
-    }
-    assert!(used.iter().all(|&u| u), "{context}: unused vertex");
-    let (v, e, f) = (body.vertices().len() as i64, edges.len() as i64 / 2, body.faces().len() as i64);
-    assert_eq!(v - e + f, 2, "{context}: V - E + F");
-    for plane in body.planes() {
-        for &x in body.vertices() {
-            assert!(plane.signed_distance(x) <= tol, "{context}: vertex outside a face plane");
-        }
-    }
-    // Positive, up to rounding for slivers as thin as the tolerance.
-    assert!(body.volume() > -tol * surface_area(body), "{context}: volume {}", body.volume());
 }
 
 /// Intersection points of well-conditioned plane triples that lie inside all

@@ -396,3 +396,101 @@ fn objective_is_the_sum_of_the_scorer_badness() {
     let got = objective(&texel, samples.boundary());
     assert!((got - expected).abs() <= 1e-8 * expected, "objective {got} vs scorer {expected}");
 }
+
+/// Degenerate sample sets over the method property tests' configurations
+/// (general and the hard regions): one or a few boundary samples inside the
+/// visible receivers, some seen edge-on, with the previous matrix of another
+/// method. The answer holds every sample, or is a typed error the focused
+/// method itself reports.
+#[test]
+fn degenerate_sample_sets_with_prev_keep_every_sample() {
+    let n = common::cases() / 4;
+    let mut failures = Vec::new();
+    let mut outcomes: std::collections::BTreeMap<String, usize> = Default::default();
+    let mut optimizer = Optimizer::new(OptimizeOptions::default());
+    for i in 0..2 * n {
+        let (config, region) = if i < n {
+            (common::config(11, i), "general".to_string())
+        } else {
+            let (c, r) = common::hard_config(11, i - n);
+            (c, format!("{r:?}"))
+        };
+        let Some(problem) = config.problem() else { continue };
+        let body = problem.visible_receiver_body();
+        let mut rng = ChaCha8Rng::seed_from_u64(i as u64);
+        let vertices = body.vertices();
+        if vertices.is_empty() {
+            continue;
+        }
+        let pick = |rng: &mut ChaCha8Rng| -> DVec3 {
+            let w: Vec<f64> = vertices.iter().map(|_| rng.random_range(0.0..1.0f64).powi(4)).collect();
+            let total: f64 = w.iter().sum::<f64>().max(1e-300);
+            vertices.iter().zip(&w).map(|(&v, &k)| v * (k / total)).sum()
+        };
+        let count = 1 + i % 3;
+        let camera = problem.camera();
+        let boundary: Vec<(DVec3, DVec3)> = (0..count)
+            .map(|k| {
+                let p = pick(&mut rng);
+                let ray = (p - camera.eye()).normalize_or(DVec3::Z);
+                let n = if k == 1 {
+                    // Edge-on: orthogonal to the ray, up to rounding.
+                    let (a, _) = ray.any_orthonormal_pair();
+                    a
+                } else {
+                    unit(&mut rng)
+                };
+                (p, n)
+            })
+            .collect();
+        let samples = Samples::from_points(&problem, &[], &boundary);
+        if std::env::var("LIXEL_DUMP").is_ok_and(|d| d == i.to_string()) {
+            eprintln!("DUMP {config:?}\n{boundary:?}");
+        }
+        let prev = match i % 4 {
+            0 => None,
+            1 => problem.solve(&Parameterization::Focused).ok(),
+            2 => problem.solve(&Parameterization::LiSpsm(Default::default())).ok(),
+            _ => problem.solve(&Parameterization::Psm(Default::default())).ok(),
+        };
+        match optimizer.optimize(&samples, prev.as_ref()) {
+            Ok(result) => {
+                *outcomes.entry(format!("{region}: {:?}", result.report.fallback)).or_default() += 1;
+                let points: Vec<DVec3> = boundary
+                    .iter()
+                    .map(|b| b.0)
+                    .filter(|&p| {
+                        camera.view_depth(p) > 0.0
+                            && problem.light().position().is_none_or(|l| (p - l).length() > 1e-6 * problem.scale())
+                    })
+                    .collect();
+                if let Err(e) = check_covers(&result.matrix, &points, &format!("#{i} ({region})")) {
+                    failures.push(format!(
+                        "{e}\n  fallback {:?}, prev {:?}\n  {config:?}",
+                        result.report.fallback,
+                        prev.map(|m| m.method)
+                    ));
+                }
+            }
+            Err(e) => {
+                *outcomes
+                    .entry(format!("{region}: error {e:?}").split([' ', '{']).take(3).collect::<Vec<_>>().join(" "))
+                    .or_default() += 1;
+                let focused_err = problem.solve(&Parameterization::Focused).err();
+                let justified = focused_err.as_ref() == Some(&e)
+                    || (matches!(e, LixelError::UnusableSamples { .. })
+                        && matches!(problem.light(), Light::Point { .. }));
+                if !justified {
+                    failures.push(format!("#{i} ({region}): unjustified {e}\n  {config:?}"));
+                }
+            }
+        }
+    }
+    eprintln!("degenerate sample sets, {} configurations: {outcomes:#?}", 2 * n);
+    assert!(
+        failures.is_empty(),
+        "{} failed; first ones:\n{}",
+        failures.len(),
+        failures[..failures.len().min(5)].join("\n")
+    );
+}

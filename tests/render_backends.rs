@@ -2,7 +2,7 @@
 //! same masks and the same experiment counts, within a stated tolerance:
 //! the two drivers rasterize a few edge pixels differently, nothing more.
 //! Skipped when either backend has no adapter (a failure under `CI=true`).
-#![cfg(feature = "render")]
+#![cfg(feature = "cli")]
 
 #[path = "render_common/mod.rs"]
 mod render_common;

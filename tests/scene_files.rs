@@ -1,7 +1,7 @@
 //! Users' scene files: OBJ and glTF loading, every refusal and repair of
 //! `lixel::mesh::load_scene_file`, and the default framing of a loaded model
 //! (every configuration of a small experiment counts pixels).
-#![cfg(feature = "render")]
+#![cfg(feature = "cli")]
 
 #[path = "render_common/mod.rs"]
 mod render_common;

@@ -190,9 +190,13 @@ fn advance_while(k: &mut usize, limit: usize, keep_going: impl Fn(usize) -> bool
 /// polygon has a side flush with a polygon edge. Rotating calipers (Toussaint
 /// 1983) visit the edges in order while three pointers track the vertices
 /// extreme along the edge (both ways) and farthest from it; each pointer only
-/// moves forwards, so all `h` candidates cost `O(h)` in total. The winning
-/// edge's rectangle is then recomputed from all vertices, so that containment
-/// never depends on the pointer bookkeeping. `O(h)` time, no allocation.
+/// moves forwards, so all `h` candidates cost `O(h)` in total. Candidates
+/// within a relative `1e-9` of the least area count as tied and go to the
+/// longest edge (a deterministic tie-break, so the rectangle moves
+/// continuously with its input; the area is then at most `1e-9` above the
+/// minimum, within the brute-force oracle's tolerance). The winning edge's rectangle is then recomputed from all
+/// vertices, so that containment never depends on the pointer bookkeeping.
+/// `O(h)` time (two passes), no allocation.
 #[must_use]
 pub fn min_area_rect(hull: &[DVec2]) -> Option<Parallelogram> {
     let n = hull.len();
@@ -209,10 +213,41 @@ pub fn min_area_rect(hull: &[DVec2]) -> Option<Parallelogram> {
     Some(bounding_rect_in_frame(hull, &frame))
 }
 
+/// Relative band within which two flush rectangles count as tied in area.
+const AREA_TIE: f64 = 1e-9;
+
 /// The index `i` of the hull edge `hull[i] → hull[i + 1]` whose flush
 /// rectangle has the least area, by rotating calipers; `None` if no edge gives
 /// a finite area.
+///
+/// Ties (areas within [`AREA_TIE`] of the least) go to the longest edge, then
+/// the lowest index: a hull with a sliver edge (a flat body padded to a
+/// hair's thickness) or nearly equal candidates then picks the same
+/// rectangle, not whichever rounding favours, so a tiny change of the input
+/// moves the map continuously. Two caliper passes, no allocation.
 fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
+    let mut least: Option<(f64, usize)> = None;
+    calipers(hull, |i, area, _| {
+        if least.is_none_or(|(a, _)| area < a) {
+            least = Some((area, i));
+        }
+    });
+    let (least_area, least_index) = least?;
+    // (Rounding can make a sliver's area slightly negative: the band is
+    // measured from the least area either way.)
+    let band = least_area + AREA_TIE * least_area.abs();
+    let mut best: Option<(f64, usize)> = None;
+    calipers(hull, |i, area, length| {
+        if area <= band && best.is_none_or(|(longest, _)| length > longest) {
+            best = Some((length, i));
+        }
+    });
+    Some(best.map_or(least_index, |(_, i)| i))
+}
+
+/// Calls `visit(i, area, edge length)` for each hull edge with a finite
+/// flush-rectangle area, by rotating calipers (`O(h)`).
+fn calipers(hull: &[DVec2], mut visit: impl FnMut(usize, f64, f64)) {
     let n = hull.len();
     let at = |k: usize| hull[k % n];
     let step = |k: usize| at(k + 1) - at(k);
@@ -221,7 +256,6 @@ fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
     // farthest from it, left-most along it. For a CCW polygon they appear in
     // this order after the edge's end vertex.
     let (mut right, mut top, mut left) = (0, 0, 0);
-    let mut best: Option<(f64, usize)> = None;
     for i in 0..n {
         let Some(frame) = EdgeFrame::new(at(i), at(i + 1)) else {
             continue;
@@ -237,11 +271,10 @@ fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
         let width = (at(right) - at(left)).dot(e);
         let height = e.perp_dot(at(top) - at(i));
         let area = width * height;
-        if area.is_finite() && best.is_none_or(|(least, _)| area < least) {
-            best = Some((area, i));
+        if area.is_finite() {
+            visit(i, area, step(i).length());
         }
     }
-    best.map(|(_, i)| i)
 }
 
 /// Minimum-area parallelogram enclosing a convex polygon: the minimum-area

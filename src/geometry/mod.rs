@@ -24,6 +24,7 @@
 mod cone;
 mod plane;
 mod polyhedron;
+mod validation;
 
 pub use cone::{min_enclosing_cone, Cone};
 pub use plane::Plane;

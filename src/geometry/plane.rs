@@ -108,6 +108,13 @@ impl Plane {
         Plane { normal: -self.normal, offset: -self.offset }
     }
 
+    /// The plane moved `distance` outwards (along its normal): its kept
+    /// half-space grows by `distance` (shrinks for a negative one).
+    #[must_use]
+    pub fn grown(self, distance: f64) -> Plane {
+        Plane { normal: self.normal, offset: self.offset - distance }
+    }
+
     /// Whether the normal and offset are finite.
     #[must_use]
     pub fn is_finite(&self) -> bool {

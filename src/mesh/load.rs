@@ -57,6 +57,7 @@ pub const FLOOR_SIZE_IN_RADII: f64 = 8.0;
 
 /// Which file axis points up.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum UpAxis {
     /// `+y` up (OBJ's usual convention and glTF's rule). No change.
     #[default]

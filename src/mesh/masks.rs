@@ -86,7 +86,7 @@ impl ShadowMasks {
     #[must_use]
     pub fn agreement_away_from_boundaries(&self, other: &Self, light: u32, radius: u32) -> MaskAgreement {
         let mut result = MaskAgreement::default();
-        if self.width != other.width || self.height != other.height || light >= 32 {
+        if self.width != other.width || self.height != other.height || light as usize >= crate::MAX_LIGHTS {
             return result;
         }
         let (w, h, r) = (self.width as i64, self.height as i64, i64::from(radius));
@@ -124,7 +124,7 @@ impl ShadowMasks {
     /// shadow bit differs. Sizes must match; otherwise `None`.
     #[must_use]
     pub fn misclassified(&self, reference: &Self, light: u32) -> Option<u64> {
-        if self.width != reference.width || self.height != reference.height || light >= 32 {
+        if self.width != reference.width || self.height != reference.height || light as usize >= crate::MAX_LIGHTS {
             return None;
         }
         let count = (0..self.shadow.len())

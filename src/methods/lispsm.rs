@@ -73,6 +73,9 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
     if focus.is_empty() {
         return super::focused::solve_as(problem, Method::LiSpsm, None);
     }
+    if problem.camera().is_orthographic() {
+        return super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::OrthographicCamera));
+    }
     let frame = problem.frame_towards(&focus);
     let j0 = super::uniform_axis(problem, &frame, &focus, Method::LiSpsm)?;
     let (e1, e2) = j0.any_orthonormal_pair();
@@ -111,7 +114,7 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
         return uniform(sin_gamma);
     }
     let z_n = depth_min.max(camera.z_near());
-    let z_f = depth_max.max(z_n * (1.0 + 1e-9));
+    let z_f = depth_max.max(z_n * (1.0 + problem.tolerances().min_relative_span));
     let n_world = match options.n_opt {
         NOpt::Simple => (z_n + (z_n * z_f).sqrt()) / sin_gamma,
         NOpt::General => {

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use crate::error::{LixelError, Result};
 use crate::geometry::{min_enclosing_cone, ConvexPolyhedron};
-use crate::light::LightFrame;
+use crate::light::{Light, LightFrame};
 use crate::matrix::{LightMatrix, Method};
 use crate::problem::ShadowProblem;
 
@@ -66,20 +66,35 @@ impl Parameterization {
     }
 }
 
-pub(crate) fn solve(problem: &ShadowProblem, parameterization: &Parameterization) -> Result<LightMatrix> {
-    match parameterization {
-        Parameterization::Normal => normal::solve(problem),
-        Parameterization::Focused => focused::solve(problem),
-        Parameterization::FocusedSnapped(options) => focused_snapped::solve(problem, options),
-        Parameterization::Psm(options) => psm::solve(problem, options),
-        Parameterization::LiSpsm(options) => lispsm::solve(problem, options),
-        Parameterization::PlaneOptimal(options) => plane_optimal::solve(problem, options),
+// `solve` lives here, not in `problem.rs`, so that `problem` does not import
+// the methods that import it.
+impl ShadowProblem {
+    /// Computes the light matrix of one parameterization.
+    ///
+    /// # Errors
+    /// See [`LixelError`]; chiefly [`LightInsideFocus`](LixelError::LightInsideFocus)
+    /// when a point light (not a spot light: a spot under 89° always fits its
+    /// own frustum) sits inside the region its single map must cover.
+    pub fn solve(&self, parameterization: &Parameterization) -> Result<LightMatrix> {
+        match parameterization {
+            Parameterization::Normal => normal::solve(self),
+            Parameterization::Focused => focused::solve(self),
+            Parameterization::FocusedSnapped(options) => focused_snapped::solve(self, options),
+            Parameterization::Psm(options) => psm::solve(self, options),
+            Parameterization::LiSpsm(options) => lispsm::solve(self, options),
+            Parameterization::PlaneOptimal(options) => plane_optimal::solve(self, options),
+        }
     }
 }
 
 /// The uniform optical axis for a body: the orthographic axis for a
 /// directional light, the axis of the narrowest cone around the body seen from
 /// a point light (its map has the smallest field of view).
+///
+/// A point light inside the body (boundary included) is
+/// [`LixelError::LightInsideFocus`]. A spot light's body lies inside its
+/// frustum `L`, so the light is at most the apex of the body; the apex has no
+/// direction and is left out ([`ShadowProblem::mappable_vertices`]).
 pub(crate) fn uniform_axis(
     problem: &ShadowProblem,
     frame: &LightFrame,
@@ -89,10 +104,11 @@ pub(crate) fn uniform_axis(
     match frame {
         LightFrame::Orthographic { .. } => Ok(DVec3::Z),
         LightFrame::Perspective { position, .. } => {
-            if body.contains(*position, problem.eps()) {
+            let spot = matches!(problem.light(), Light::Spot { .. });
+            if !spot && body.contains(*position, problem.eps()) {
                 return Err(LixelError::LightInsideFocus { method });
             }
-            let dirs: Vec<DVec3> = body.vertices().iter().map(|&p| frame.homogeneous(p)).collect();
+            let dirs: Vec<DVec3> = problem.mappable_vertices(body).iter().map(|&p| frame.homogeneous(p)).collect();
             min_enclosing_cone(&dirs)
                 .filter(|cone| cone.cos_half_angle > problem.tolerances().min_front_cosine)
                 .map(|cone| cone.axis)

@@ -80,14 +80,14 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
     };
 
     // The visible part of the plane (a thin slab of the focus body).
-    let slab = problem.eps() * 1e3;
-    let on_plane = focus.clip_all([grown(plane, slab), grown(plane.flipped(), slab)].iter(), problem.eps());
+    let slab = problem.coarse_eps();
+    let on_plane = focus.clip_all([plane.grown(slab), plane.flipped().grown(slab)].iter(), problem.eps());
     if on_plane.is_empty() {
         return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneNotVisible));
     }
     let beta = options.min_relative_w;
     let directions = |body: &crate::geometry::ConvexPolyhedron| -> Vec<DVec3> {
-        body.vertices().iter().map(|&p| cosine_frame(&frame, frame.homogeneous(p))).collect()
+        problem.mappable_vertices(body).iter().map(|&p| cosine_frame(&frame, frame.homogeneous(p))).collect()
     };
     let (plane_dirs, focus_dirs) = (directions(&on_plane), directions(&focus));
     // Every relevant point must keep at least β times the smallest w of the
@@ -97,7 +97,7 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
     let acceptable = |axis: DVec3| {
         let floor_w = plane_dirs.iter().map(|u| axis.dot(*u)).fold(f64::INFINITY, f64::min);
         let max_w = focus_dirs.iter().map(|u| axis.dot(*u)).fold(0.0, f64::max);
-        let least = (beta * floor_w).max(if frame.is_orthographic() { front * max_w } else { front });
+        let least = (beta * floor_w).max(front * max_w);
         floor_w > 0.0 && focus_dirs.iter().all(|u| axis.dot(*u) >= least)
     };
     let blended = |t: f64| plane_axis * (1.0 - t) + focused_axis * t;
@@ -106,7 +106,7 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
     } else {
         // Bisection for the least blend towards the focused axis that is acceptable.
         let (mut lo, mut hi) = (0.0, 1.0);
-        for _ in 0..40 {
+        for _ in 0..problem.tolerances().blend_bisection_steps {
             let mid = 0.5 * (lo + hi);
             if acceptable(blended(mid)) {
                 hi = mid;
@@ -116,7 +116,11 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
         }
         (blended(hi), Some(Fallback::PlaneOptimalBlended { blend: hi }))
     };
-    problem.place(frame, axis, &focus, Method::PlaneOptimal, fallback)
+    // So near the plane's vanishing line that f64 cannot hold the map (a
+    // light grazing the plane): the plane is degenerate for this light.
+    problem
+        .place(frame, axis, &focus, Method::PlaneOptimal, fallback)
+        .or_else(|_| super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate)))
 }
 
 /// The unit plane-optimal axis in light coordinates of `frame`, or `None`
@@ -137,16 +141,22 @@ fn plane_optimal_axis(problem: &ShadowProblem, frame: &crate::LightFrame, plane:
     let pixel_from_plane = restrict(s_rows);
     let light_from_plane = restrict(t_rows);
     // x̂ = (S P) y and X~ = (T P) y, so x̂ = (S P)(T P)⁻¹ X~ and j is row 3.
-    let det = light_from_plane.determinant();
-    let light_scale = light_from_plane.to_cols_array().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if !(det.abs() > 1e-12 * light_scale.powi(3)) || !(pixel_from_plane.determinant().abs() > 0.0) {
+    // Singular relative to Hadamard's bound (the product of the column
+    // lengths): scale-free, so a light 1e9 away (huge translation column) is
+    // judged like the directional light it approaches.
+    let singular = |m: &DMat3| {
+        let bound = m.x_axis.length() * m.y_axis.length() * m.z_axis.length();
+        !(m.determinant().abs() > problem.tolerances().singular_det * bound)
+    };
+    if singular(&light_from_plane) || singular(&pixel_from_plane) {
         return None;
     }
     let pixel_from_light = pixel_from_plane * light_from_plane.inverse();
     let axis = pixel_from_light.row(2);
-    // The eye in the plane makes the w row of S P vanish on the plane's frame.
+    // The eye in the plane makes the w row of S P vanish on the plane's frame
+    // (an orthographic camera's w row is constant: no such eye).
     let eye_distance = plane.signed_distance(problem.camera().eye()).abs();
-    if !(eye_distance > problem.eps()) {
+    if !problem.camera().is_orthographic() && !(eye_distance > problem.eps()) {
         return None;
     }
     axis.try_normalize()
@@ -161,9 +171,4 @@ fn cosine_frame(frame: &crate::LightFrame, x: DVec3) -> DVec3 {
     } else {
         x.normalize_or_zero()
     }
-}
-
-/// `plane` with its kept half-space grown by `distance`.
-fn grown(plane: Plane, distance: f64) -> Plane {
-    Plane { normal: plane.normal, offset: plane.offset - distance }
 }

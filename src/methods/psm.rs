@@ -80,7 +80,12 @@ fn post_perspective(problem: &ShadowProblem, options: &PsmOptions, hull: &Convex
     let view = camera.view_from_world();
     // Virtual shift: every vertex of H must be at least `near` in front.
     let delta = hull.vertices().iter().map(|&p| (view * p.extend(1.0)).z + near).fold(0.0_f64, f64::max);
-    let far = camera.z_far().max(near * (1.0 + 1e-6)) + delta;
+    // An infinite far plane: the hull (clipped by the finite scene) ends first.
+    let far = match camera.z_far() {
+        f if f.is_finite() => f,
+        _ => hull.vertices().iter().map(|&p| camera.view_depth(p)).fold(near, f64::max) * 2.0,
+    };
+    let far = far.max(near * (1.0 + problem.tolerances().min_relative_span)) + delta;
     let shifted_view = DMat4::from_translation(DVec3::new(0.0, 0.0, -delta)) * view;
     // Keep the camera's x/y rows (asymmetric or jittered frusta included) and
     // replace the depth row by one for [near, far]: z_ndc = (a z + b) / (-z).
@@ -115,6 +120,9 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions) -> Result<Lig
     if focus.is_empty() {
         return super::focused::solve_as(problem, Method::Psm, None);
     }
+    if problem.camera().is_orthographic() {
+        return super::focused::solve_as(problem, Method::Psm, Some(Fallback::OrthographicCamera));
+    }
     let hull = problem.psm_hull();
     let frame = problem.frame_towards(&focus);
     // First choice: the whole hull H. If H wraps around the light, PSM's own
@@ -143,32 +151,16 @@ fn place(
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
 ) -> Result<LightMatrix> {
-    let at_light = problem.eps() * 1e3;
-    let mut points: Vec<DVec3> = region
-        .vertices()
-        .iter()
-        .copied()
-        .filter(|&p| frame.homogeneous(p).length() > at_light || frame.is_orthographic())
-        .collect();
-    points.extend_from_slice(focus.vertices());
+    let mut points = problem.mappable_vertices(region);
+    points.extend(problem.mappable_vertices(focus));
     // Depth covers the casters of the visible receivers and all of `region`
     // (for `H`, which holds casters itself, the light included when it lies
     // in `S`: such a map needs unclipped depth).
     let mut depth_points = problem.caster_body(focus).vertices().to_vec();
     depth_points.extend_from_slice(region.vertices());
-    crate::matrix::Placement {
-        light: *problem.light(),
-        frame,
-        axis,
-        focus: &points,
-        depth_points: &depth_points,
-        map: problem.map_size(),
-        fit: problem.fit_options(),
-        tolerances: problem.tolerances(),
-        method: Method::Psm,
-        fallback,
-    }
-    .build(&mut crate::fit::FitWorkspace::default())
+    problem
+        .placement(frame, axis, &points, &depth_points, Method::Psm, fallback)
+        .build(&mut crate::fit::FitWorkspace::default())
 }
 
 /// PSM's optical axis for `region`, in light coordinates of `frame`; `None`
@@ -184,11 +176,9 @@ fn psm_axis(
     }
     let pps = post_perspective(problem, options, region);
     let l = pps.light;
-    let at_light = problem.eps() * 1e3;
-    let dirs: Vec<DVec3> = region
-        .vertices()
+    let dirs: Vec<DVec3> = problem
+        .mappable_vertices(region)
         .iter()
-        .filter(|&&p| frame.is_orthographic() || frame.homogeneous(p).length() > at_light)
         .map(|&p| {
             let q = pps.clip_from_world * p.extend(1.0);
             q.truncate() * l.w - l.truncate() * q.w

@@ -21,13 +21,13 @@ use glam::{DMat3, DVec2, DVec3};
 use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::min_enclosing_cone;
-use crate::matrix::{fit_homography, AxisFit, Fallback, LightMatrix, Method, Placement};
+use crate::matrix::{fit_homography, holds_all, AxisFit, Fallback, LightMatrix, Method};
 
 pub use objective::{
     objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
     SampleGradient,
 };
-pub use samples::{Readback, SampleCounts, SampleOptions, Samples};
+pub use samples::{PixelRect, Readback, ReadbackDepth, ReadbackLayout, RowOrder, SampleCounts, SampleOptions, Samples};
 pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
 
 /// The paper's rotation angles, in degrees (one negative for exploration).
@@ -240,16 +240,49 @@ impl Optimizer {
         report.objective_new = best.objective;
         report.median_new = self.median(samples, &best.homography);
         let new_matrix = self.finish(samples, best.homography);
-        let Some(prev_candidate) = start_prev else {
-            report.accepted = true;
-            return Ok(Optimized { matrix: new_matrix, report });
+        let (matrix, other) = match start_prev {
+            None => {
+                report.accepted = true;
+                (new_matrix, None)
+            }
+            Some(prev_candidate) => {
+                let median_prev = self.median(samples, &prev_candidate.homography);
+                report.objective_prev = Some(prev_candidate.objective);
+                report.median_prev = Some(median_prev);
+                report.accepted = report.median_new < self.options.accept_ratio * median_prev;
+                let prev_matrix = self.finish(samples, prev_candidate.homography);
+                if report.accepted {
+                    (new_matrix, Some(prev_matrix))
+                } else {
+                    (prev_matrix, Some(new_matrix))
+                }
+            }
         };
-        let median_prev = self.median(samples, &prev_candidate.homography);
-        report.objective_prev = Some(prev_candidate.objective);
-        report.median_prev = Some(median_prev);
-        report.accepted = report.median_new < self.options.accept_ratio * median_prev;
-        let matrix = if report.accepted { new_matrix } else { self.finish(samples, prev_candidate.homography) };
+        // The answer must hold every relevant sample (not only the extreme
+        // rays it was fitted to): otherwise the other matrix, else the
+        // focused one.
+        if self.holds_samples(samples, &matrix) {
+            return Ok(Optimized { matrix, report });
+        }
+        if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
+            report.accepted = !report.accepted;
+            return Ok(Optimized { matrix: other, report });
+        }
+        report.fallback = Some(Fallback::NoUsableSamples);
+        let mut matrix = focused;
+        matrix.method = Method::Optimized;
+        matrix.fallback = Some(Fallback::NoUsableSamples);
         Ok(Optimized { matrix, report })
+    }
+
+    /// Whether `matrix` is finite and holds every relevant sample, checked
+    /// in world coordinates as a renderer evaluates it (composing `G` with a
+    /// far light's translation rounds differently from light coordinates).
+    fn holds_samples(&self, samples: &Samples, matrix: &LightMatrix) -> bool {
+        let slack = samples.problem.tolerances().coverage_slack;
+        matrix.clip_from_world.is_finite()
+            && holds_all(&matrix.homography, &samples.relevant, slack)
+            && samples.relevant_world.iter().all(|&p| matrix.covers(p, slack))
     }
 
     /// The objective of optical axis `axis` (light coordinates of
@@ -324,20 +357,9 @@ impl Optimizer {
     }
 
     fn finish(&self, samples: &Samples, homography: DMat3) -> LightMatrix {
-        let problem = &samples.problem;
-        let fit = self.fit_options(samples);
-        Placement {
-            light: *problem.light(),
-            frame: samples.frame,
-            axis: homography.row(2),
-            focus: &[],
-            depth_points: &samples.depth_points,
-            map: problem.map_size(),
-            fit: &fit,
-            tolerances: problem.tolerances(),
-            method: Method::Optimized,
-            fallback: None,
-        }
-        .finish(homography, &self.extreme)
+        samples
+            .problem
+            .placement(samples.frame, homography.row(2), &[], &samples.depth_points, Method::Optimized, None)
+            .finish(homography, &self.extreme)
     }
 }

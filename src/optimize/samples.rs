@@ -10,19 +10,163 @@ use crate::optimize::objective::BoundarySample;
 use crate::problem::ShadowProblem;
 
 /// A low-resolution readback of the camera's analysis pass, as an engine
-/// reads it: row-major, row 0 at the top, covering the full viewport.
+/// reads it: row-major, laid out as [`layout`](Self::layout) says.
 #[derive(Clone, Copy, Debug)]
 pub struct Readback<'a> {
     /// Width in pixels (of the readback, not the screen).
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Depth-buffer values in `[0, 1]`; `1` (the cleared far plane) means no geometry.
+    /// Depth values, in the convention of [`ReadbackLayout::depth`].
     pub depth: &'a [f32],
     /// Bit `i` set: the pixel is in light `i`'s shadow.
     pub shadow_bits: &'a [u32],
     /// Optional world-space normals (need not be unit length).
     pub normals: Option<&'a [[f32; 3]]>,
+    /// Depth convention, row order and covered part of the viewport.
+    pub layout: ReadbackLayout,
+}
+
+/// What a readback's depth values are.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ReadbackDepth {
+    /// lixel's own depth of the normalised camera (the `z` of
+    /// [`Camera::screen_from_world`](crate::Camera::screen_from_world)):
+    /// `[0, 1]` growing away from the eye, `1` = nothing. What lixel's
+    /// renderer and [`SyntheticScene`](crate::synthetic::SyntheticScene)
+    /// write; for a wgpu-convention camera (such as
+    /// [`Camera::look_at`](crate::Camera::look_at)) the same as [`Window`](Self::Window).
+    #[default]
+    Lixel,
+    /// The depth buffer of the engine's `[0, 1]` clip-depth projection,
+    /// forward: NDC depth, `1` (the cleared far plane) = nothing.
+    Window,
+    /// The depth buffer of a reverse-Z `[0, 1]` projection: `0` = nothing.
+    WindowReversed,
+    /// OpenGL window depth of a `[-1, 1]` projection (`glDepthRange(0, 1)`):
+    /// `(z_ndc + 1) / 2`, `1` = nothing.
+    GlWindow,
+    /// Linear distance in front of the eye along the view direction, in
+    /// world units; non-finite = nothing.
+    LinearView,
+}
+
+/// Row order of a readback.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum RowOrder {
+    /// Row 0 is the top of the screen (wgpu, Direct3D, Vulkan, Metal).
+    #[default]
+    TopDown,
+    /// Row 0 is the bottom (OpenGL's `glReadPixels`).
+    BottomUp,
+}
+
+/// A rectangle of the viewport in full-resolution pixels; `y` counts rows
+/// in the readback's [`RowOrder`] (from the bottom for `BottomUp`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PixelRect {
+    /// First column.
+    pub x: u32,
+    /// First row.
+    pub y: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+/// How a [`Readback`] is laid out. The default is lixel's own: lixel depth,
+/// top-down rows, the whole viewport.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct ReadbackLayout {
+    /// What the depth values are.
+    pub depth: ReadbackDepth,
+    /// Row order.
+    pub rows: RowOrder,
+    /// The part of the viewport the readback covers; `None` is all of it.
+    pub rect: Option<PixelRect>,
+}
+
+/// A readback brought to lixel's convention: top-down rows, lixel depth
+/// (non-finite where nothing was drawn), screen placement.
+struct Grid {
+    depth: Vec<f64>,
+    bits: Vec<u32>,
+    normals: Option<Vec<[f32; 3]>>,
+    /// Screen position of the readback's top-left corner, full-resolution pixels.
+    origin: glam::DVec2,
+    /// Full-resolution pixels per readback pixel.
+    step: glam::DVec2,
+}
+
+impl Grid {
+    fn new(camera: &crate::Camera, readback: &Readback<'_>) -> Result<Self> {
+        use crate::conventions::DepthDirection;
+        let (w, h) = (readback.width as usize, readback.height as usize);
+        let layout = readback.layout;
+        let viewport = camera.viewport();
+        let rect = layout.rect.unwrap_or(PixelRect { x: 0, y: 0, width: viewport.x, height: viewport.y });
+        let inside = rect.width > 0
+            && rect.height > 0
+            && u64::from(rect.x) + u64::from(rect.width) <= u64::from(viewport.x)
+            && u64::from(rect.y) + u64::from(rect.height) <= u64::from(viewport.y);
+        if !inside {
+            return Err(LixelError::UnusableSamples { reason: "readback rectangle is empty or outside the viewport" });
+        }
+        let reverse = camera.conventions().depth == DepthDirection::Reverse;
+        match layout.depth {
+            ReadbackDepth::WindowReversed if !reverse => {
+                return Err(LixelError::UnusableSamples {
+                    reason: "readback depth is reverse-Z but the camera's projection is forward-Z",
+                })
+            }
+            ReadbackDepth::Window | ReadbackDepth::GlWindow if reverse => {
+                return Err(LixelError::UnusableSamples {
+                    reason: "readback depth is forward-Z but the camera's projection is reverse-Z",
+                })
+            }
+            _ => {}
+        }
+        let top = match layout.rows {
+            RowOrder::TopDown => rect.y,
+            RowOrder::BottomUp => viewport.y - rect.y - rect.height,
+        };
+        let to_lixel = |v: f32| -> f64 {
+            let v = f64::from(v);
+            if !v.is_finite() {
+                return f64::NAN;
+            }
+            let lixel = match layout.depth {
+                ReadbackDepth::Lixel => v,
+                ReadbackDepth::Window if v >= 1.0 => f64::NAN,
+                ReadbackDepth::WindowReversed if v <= 0.0 => f64::NAN,
+                ReadbackDepth::GlWindow if v >= 1.0 => f64::NAN,
+                ReadbackDepth::Window | ReadbackDepth::WindowReversed => {
+                    camera.depth_at_distance(camera.distance_at_source_depth(v))
+                }
+                ReadbackDepth::GlWindow => camera.depth_at_distance(camera.distance_at_source_depth(2.0 * v - 1.0)),
+                ReadbackDepth::LinearView => camera.depth_at_distance(v),
+            };
+            if lixel.is_finite() && (0.0..1.0).contains(&lixel) {
+                lixel
+            } else {
+                f64::NAN
+            }
+        };
+        let source_row = |y: usize| match layout.rows {
+            RowOrder::TopDown => y,
+            RowOrder::BottomUp => h - 1 - y,
+        };
+        let rows = |y: usize| source_row(y) * w..source_row(y) * w + w;
+        Ok(Self {
+            depth: (0..h).flat_map(|y| readback.depth[rows(y)].iter().map(|&v| to_lixel(v))).collect(),
+            bits: (0..h).flat_map(|y| readback.shadow_bits[rows(y)].iter().copied()).collect(),
+            normals: readback.normals.map(|n| (0..h).flat_map(|y| n[rows(y)].iter().copied()).collect()),
+            origin: glam::DVec2::new(f64::from(rect.x), f64::from(top)),
+            step: glam::DVec2::new(f64::from(rect.width) / w as f64, f64::from(rect.height) / h as f64),
+        })
+    }
 }
 
 /// How [`Samples::from_readback`] classifies pixels.
@@ -77,6 +221,9 @@ pub struct Samples {
     pub(crate) boundary: Vec<BoundarySample>,
     /// `X~` of every relevant sample.
     pub(crate) relevant: Vec<DVec3>,
+    /// World position of every relevant sample (the optimizer checks its
+    /// answer on them, as a renderer evaluates it).
+    pub(crate) relevant_world: Vec<DVec3>,
     /// World points whose depth the map must cover: the visible receivers'
     /// body and its casters, and every relevant sample.
     pub(crate) depth_points: Vec<DVec3>,
@@ -97,6 +244,7 @@ impl Samples {
             frame,
             boundary: Vec::new(),
             relevant: Vec::new(),
+            relevant_world: Vec::new(),
             depth_points,
             counts: SampleCounts::default(),
         }
@@ -169,7 +317,9 @@ impl Samples {
                 (glam::DVec2::new(d.x, d.y) - px * d.w) / clip.w
             };
             let ds = DMat2::from_cols(column(t1), column(t2));
-            if !(ds.determinant().abs() > 0.0) {
+            // Seen (nearly) edge-on: the tangent images are (nearly) parallel.
+            let sine = ds.determinant().abs() / (ds.x_axis.length() * ds.y_axis.length());
+            if !(sine > problem.tolerances().min_view_sine) {
                 samples.counts.rejected_invalid += 1;
                 continue;
             }
@@ -189,7 +339,10 @@ impl Samples {
     /// Adds a relevant world point; `false` if it was rejected.
     fn push_relevant(&mut self, p: DVec3, camera: &crate::Camera) -> bool {
         self.counts.covered += 1;
-        if !p.is_finite() || camera.view_depth(p) <= 0.0 {
+        if !p.is_finite()
+            || p.abs().max_element() > crate::MAX_COORDINATE
+            || !((camera.clip_from_world() * p.extend(1.0)).w > 0.0)
+        {
             self.counts.rejected_invalid += 1;
             return false;
         }
@@ -199,6 +352,7 @@ impl Samples {
             return false;
         }
         self.relevant.push(x);
+        self.relevant_world.push(p);
         self.depth_points.push(p);
         true
     }
@@ -212,9 +366,15 @@ impl Samples {
     /// read-back normals when given, else from central differences of depth.
     /// Relevant samples: every shadowed pixel plus the boundary samples.
     ///
+    /// The readback may be in the engine's own layout ([`ReadbackLayout`]):
+    /// its depth convention, row order and sub-rectangle are brought to
+    /// lixel's first, so every layout of the same image gives the same samples.
+    ///
     /// # Errors
     /// [`LixelError::UnusableSamples`] when the buffer sizes do not match
-    /// `width x height` or `light_index >= 32`.
+    /// `width x height`, `light_index >= 32`, the rectangle is empty or
+    /// outside the viewport, or the declared depth direction contradicts the
+    /// camera's projection.
     pub fn from_readback(
         problem: &ShadowProblem,
         readback: &Readback<'_>,
@@ -229,23 +389,23 @@ impl Samples {
         {
             return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
         }
-        if light_index >= 32 {
+        if light_index as usize >= crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "light index must be below 32" });
         }
+        let camera = *problem.camera();
+        let grid = Grid::new(&camera, readback)?;
         let mut samples = Self::empty(problem);
         if n == 0 {
             return Ok(samples);
         }
-        let camera = *problem.camera();
         let light = *problem.light();
         let world_from_screen = camera.screen_from_world().inverse();
-        let viewport = camera.viewport().as_dvec2();
-        // Full-resolution pixels per readback pixel.
-        let step = glam::DVec2::new(viewport.x / w as f64, viewport.y / h as f64);
+        let step = grid.step;
         let bit = 1u32 << light_index;
+        // Lixel depth, non-finite where nothing was drawn (see `Grid`).
         let depth_at = |x: usize, y: usize| -> Option<f64> {
-            let d = f64::from(readback.depth[y * w + x]);
-            (d.is_finite() && (0.0..1.0).contains(&d)).then_some(d)
+            let d = grid.depth[y * w + x];
+            d.is_finite().then_some(d)
         };
         // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
         let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
@@ -258,11 +418,11 @@ impl Samples {
         };
         // Per pixel: 1 shadowed, 2 lit, 0 no geometry; then the OR of that
         // over the 3x3 neighbourhood (separable), so 3 marks a shadow boundary.
-        let class: Vec<u8> = readback
+        let class: Vec<u8> = grid
             .depth
             .iter()
-            .zip(readback.shadow_bits)
-            .map(|(&d, &bits)| match (d.is_finite() && (0.0..1.0).contains(&d), bits & bit != 0) {
+            .zip(&grid.bits)
+            .map(|(&d, &bits)| match (d.is_finite(), bits & bit != 0) {
                 (false, _) => 0,
                 (true, true) => 1,
                 (true, false) => 2,
@@ -300,9 +460,9 @@ impl Samples {
                 if !shadowed && !mixed {
                     continue;
                 }
-                let d = f64::from(readback.depth[y * w + x]);
-                let sx = (x as f64 + 0.5) * step.x;
-                let sy = (y as f64 + 0.5) * step.y;
+                let d = grid.depth[y * w + x];
+                let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
+                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
                 let here = unproject(sx, sy, d);
                 if !(here.w > 0.0) || !here.is_finite() {
                     samples.counts.rejected_invalid += 1;
@@ -311,6 +471,7 @@ impl Samples {
                 let world = here.truncate() / here.w;
                 let x_light = samples.frame.homogeneous4(here);
                 samples.relevant.push(x_light);
+                samples.relevant_world.push(world);
                 samples.depth_points.push(world);
                 if !mixed {
                     continue;
@@ -329,7 +490,7 @@ impl Samples {
                     (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
                         .then_some(first / if dx != 0 { step.x } else { step.y })
                 };
-                let normal_given = readback.normals.map(|normals| {
+                let normal_given = grid.normals.as_ref().map(|normals| {
                     let [nx, ny, nz] = normals[y * w + x];
                     DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
                 });
@@ -358,7 +519,7 @@ impl Samples {
                         let tx = (dx4.truncate() - world * dx4.w) / here.w;
                         let ty = (dy4.truncate() - world * dy4.w) / here.w;
                         let mut normal = tx.cross(ty).normalize_or_zero();
-                        if normal.dot(camera.eye() - world) < 0.0 {
+                        if normal.dot(camera.towards_viewer(world)) < 0.0 {
                             normal = -normal;
                         }
                         // Homogeneous point and its homogeneous derivatives: one scale.
@@ -393,7 +554,8 @@ fn plane_derivatives(
     // Move one pixel along x (or y) and intersect that pixel's ray with the plane.
     let hit = |px: f64, py: f64| -> Option<DVec3> {
         let a = world_from_screen.project_point3(DVec3::new(px, py, 0.0));
-        let b = world_from_screen.project_point3(DVec3::new(px, py, 1.0));
+        // Depth 0.5, not 1: an infinite far plane's depth 1 is at infinity.
+        let b = world_from_screen.project_point3(DVec3::new(px, py, 0.5));
         let denom = normal.dot(b - a);
         if denom.abs() <= f64::EPSILON * (b - a).length() {
             return None;

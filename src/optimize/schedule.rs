@@ -20,7 +20,7 @@ impl AnalysisPlan {
     /// Whether light `light` is looked up in a plain focused map.
     #[must_use]
     pub fn is_focused(&self, light: usize) -> bool {
-        light < 32 && self.focused >> light & 1 == 1
+        light < crate::MAX_LIGHTS && self.focused >> light & 1 == 1
     }
 }
 
@@ -86,15 +86,12 @@ pub struct ShadowScheduler {
 }
 
 impl ShadowScheduler {
-    /// The most lights one u32 shadow bitmask holds.
-    pub const MAX_LIGHTS: usize = 32;
-
     /// A scheduler for `light_count` lights.
     ///
     /// # Errors
-    /// [`LixelError::UnusableSamples`] for more than 32 lights or a zero cadence.
+    /// [`LixelError::UnusableSamples`] for more than [`MAX_LIGHTS`](crate::MAX_LIGHTS) lights or a zero cadence.
     pub fn new(light_count: usize, options: ScheduleOptions, optimizer: Optimizer) -> Result<Self> {
-        if light_count > Self::MAX_LIGHTS {
+        if light_count > crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "at most 32 lights share one shadow bitmask" });
         }
         if options.optimize_every == 0 || options.focused_every == 0 {

@@ -98,6 +98,7 @@ impl AnalysisReadback {
             depth: &self.masks.depth,
             shadow_bits: bits,
             normals: Some(&self.normals),
+            layout: crate::optimize::ReadbackLayout::default(),
         }
     }
 
@@ -129,7 +130,7 @@ impl AnalysisReadback {
     ) -> Vec<crate::Result<crate::Samples>> {
         let bits = self.optimizer_bits();
         let input = self.optimizer_input(&bits);
-        (0..lights.len().min(32))
+        (0..lights.len().min(crate::MAX_LIGHTS))
             .map(|i| Self::samples_from(&input, self.camera, lights[i], bounds, map, i as u32))
             .collect()
     }

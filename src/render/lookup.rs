@@ -96,8 +96,8 @@ impl LookupState {
         unclipped_available: bool,
     ) -> Self {
         let spec = lookup.spec();
-        // Depth bound as unfilterable float: `textureLoad` from a
-        // `texture_depth_*` has no GLSL translation (GL backend).
+        // Depth bound as unfilterable float: naga cannot translate
+        // `textureLoad` from a `texture_depth_*` to GLSL (the GL backend).
         let mut entries = vec![map_entry(0, wgpu::TextureSampleType::Float { filterable: false })];
         if let Some(format) = spec.map_color {
             let sample_type = format.sample_type(None, None).unwrap_or(wgpu::TextureSampleType::Uint);
@@ -346,13 +346,13 @@ impl ShadowMaps {
                     })
                 })
                 .collect::<Vec<_>>();
-            (texture, array_view, layer_views)
+            (array_view, layer_views)
         };
-        let (_, depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
+        let (depth_array, depth_layers) = array("lixel shadow maps", DEPTH_FORMAT);
         let color = color.map(|format| array("lixel shadow map words", format));
         let mut entries =
             vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&depth_array) }];
-        if let Some((_, view, _)) = &color {
+        if let Some((view, _)) = &color {
             entries.push(wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) });
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -360,7 +360,7 @@ impl ShadowMaps {
             layout,
             entries: &entries,
         });
-        let color_layers = color.map(|(_, _, layers)| layers).unwrap_or_default();
+        let color_layers = color.map(|(_, layers)| layers).unwrap_or_default();
         Self { depth_array, depth_layers, color_layers, bind_group, width, height }
     }
 

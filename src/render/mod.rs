@@ -369,7 +369,7 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         };
-        let layouts = SceneLayouts::new(device);
+        let layouts = device::capture(device, "camera and analysis layouts", || SceneLayouts::new(device))?;
         let camera_lights = lights_buffer("lixel camera pass lights");
         let camera_bindings = CameraBindings {
             bind_group: device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -554,18 +554,21 @@ impl Renderer {
             }
         }
         debug_assert!(maps.len() <= MAX_SHADOW_SLOTS);
-        let lookup = self.lookup_state(frame.lookup);
+        let lookup = self.lookup_state(frame.lookup)?;
         self.ensure_resources(lookup, &maps, viewport.x, viewport.y);
         Ok(MapSlots { maps, analysis_layers, lookup })
     }
 
     /// The index of `lookup`'s pipelines and maps, built on first use.
-    fn lookup_state(&mut self, lookup: ShadowLookup) -> usize {
+    fn lookup_state(&mut self, lookup: ShadowLookup) -> Result<usize, RenderError> {
         if let Some(i) = self.lookups.iter().position(|s| s.lookup == lookup) {
-            return i;
+            return Ok(i);
         }
-        self.lookups.push(LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available));
-        self.lookups.len() - 1
+        let state = device::capture(&self.device, "shadow, camera and analysis pipelines", || {
+            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available)
+        })?;
+        self.lookups.push(state);
+        Ok(self.lookups.len() - 1)
     }
 
     /// Camera, lights of both scene passes and the shadow passes' slots.

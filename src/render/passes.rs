@@ -39,6 +39,8 @@ impl SceneLayouts {
         let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::FRAGMENT,
+            // Depth bound as unfilterable float: `textureLoad` from a
+            // `texture_depth_*` has no GLSL translation (GL backend).
             ty: wgpu::BindingType::Texture {
                 sample_type,
                 view_dimension: wgpu::TextureViewDimension::D2,
@@ -56,8 +58,6 @@ impl SceneLayouts {
                 entries: &[
                     uniform(0),
                     uniform(1),
-                    // Depth bound as unfilterable float: `textureLoad` from a
-                    // `texture_depth_*` has no GLSL translation (GL backend).
                     texture(3, wgpu::TextureSampleType::Float { filterable: false }),
                     texture(4, wgpu::TextureSampleType::Uint),
                 ],

@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::{Camera, LightFrame, LightMatrix};
 
 /// Lights a camera or analysis pass can look up (the bit width of the masks).
-pub const MAX_LIGHTS: usize = 32;
+pub use crate::tolerance::MAX_LIGHTS;
 
 /// Stride between the per-light slots of the shadow pass's uniform buffer:
 /// wgpu's default `min_uniform_buffer_offset_alignment`.
