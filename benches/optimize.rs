@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{DVec3, UVec2};
-use lixel::optimize::{OptimizeOptions, Optimizer, SampleOptions};
+use lixel::optimize::{self, OptimizeOptions, Optimizer, SampleOptions};
 use lixel::synthetic::{Sphere, SyntheticReadback, SyntheticScene};
 use lixel::{Aabb, Camera, Light, Samples, ShadowMapSize, ShadowProblem};
 use rand::{Rng, SeedableRng};
@@ -106,5 +106,65 @@ fn by_lights(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, by_resolution, by_lights);
+/// Sample extraction alone for 1/4/32 lights at 180x180: one light at a
+/// time (`from_readback` per light) and all lights in one pass.
+fn extraction(c: &mut Criterion) {
+    let mut group = c.benchmark_group("optimize/extract_180x180");
+    group.sample_size(20);
+    for lights in [1usize, 4, 32] {
+        let setup = setup(180, lights);
+        group.throughput(Throughput::Elements(lights as u64));
+        group.bench_with_input(BenchmarkId::new("per_light", lights), &setup, |b, s| {
+            let readback = s.readback.as_readback(false);
+            b.iter(|| {
+                s.problems
+                    .iter()
+                    .enumerate()
+                    .map(|(bit, p)| {
+                        Samples::from_readback(p, &readback, bit as u32, &SampleOptions::default())
+                            .expect("samples")
+                            .boundary()
+                            .len()
+                    })
+                    .sum::<usize>()
+            });
+        });
+        group.bench_with_input(BenchmarkId::new("all_lights", lights), &setup, |b, s| {
+            let readback = s.readback.as_readback(false);
+            b.iter(|| {
+                Samples::from_readback_all(&s.problems, &readback, &SampleOptions::default())
+                    .expect("samples")
+                    .iter()
+                    .map(|samples| samples.boundary().len())
+                    .sum::<usize>()
+            });
+        });
+    }
+    group.finish();
+}
+
+/// 1/4/32 lights together at 180x180, as an engine runs them: all lights'
+/// samples in one pass, then `optimize_lights` (parallel with `rayon`).
+fn together(c: &mut Criterion) {
+    let mut group = c.benchmark_group("optimize/180x180_together");
+    group.sample_size(20);
+    for lights in [1usize, 4, 32] {
+        let setup = setup(180, lights);
+        let mut optimizers = vec![Optimizer::new(OptimizeOptions::default()); lights];
+        let prev = vec![None; lights];
+        group.throughput(Throughput::Elements(lights as u64));
+        group.bench_with_input(BenchmarkId::new("lights", lights), &setup, |b, s| {
+            let readback = s.readback.as_readback(false);
+            b.iter(|| {
+                let samples =
+                    Samples::from_readback_all(&s.problems, &readback, &SampleOptions::default()).expect("samples");
+                let results = optimize::optimize_lights(&mut optimizers, &samples, &prev).expect("lengths");
+                std::hint::black_box(results).len()
+            });
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, by_resolution, by_lights, extraction, together);
 criterion_main!(benches);

@@ -1,6 +1,7 @@
 //! The `lixel` command line: `lixel experiment` (the misclassification
-//! experiment, the project's main job) and `lixel methods` (every classical
-//! matrix on one configuration, scored).
+//! experiment, the project's main job), `lixel merge` (the report of a
+//! sharded experiment) and `lixel methods` (every classical matrix on one
+//! configuration, scored).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -8,7 +9,8 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::{DVec3, UVec2};
 use lixel::experiment::{
-    self, ExperimentConfig, LightKind, MethodKind, Preset, Progress, SceneSource, TimingOptions, Truth,
+    self, ExperimentConfig, LightKind, MergeOptions, MethodKind, Preset, Progress, SceneSource, Shard, TimingOptions,
+    Truth,
 };
 use lixel::mesh::{SceneOptions, UpAxis};
 use lixel::render::Gpu;
@@ -31,6 +33,9 @@ enum Command {
     /// Count misclassified shadow pixels of every method against exact ground
     /// truth (Chong & Gortler 2006, Table 1) and write a report directory.
     Experiment(Box<ExperimentArgs>),
+    /// Merge the report directories of a sharded experiment (`experiment
+    /// --shard`) into one report, as an unsharded run would have written it.
+    Merge(MergeArgs),
     /// Compute every classical matrix for one walkthrough configuration and
     /// print how well each samples the visible floor (badness: screen pixels
     /// per texel, squared; lower is better).
@@ -63,25 +68,25 @@ struct ExperimentArgs {
     triangles: Option<usize>,
     /// Eye position x,y,z (default: built-in scene a little above the floor at
     /// its edge; --scene model from the front, 25° up, whole model in view).
-    #[arg(long, value_parser = parse_vec3)]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<DVec3>,
     /// Look-at point x,y,z (default: the scene centre).
-    #[arg(long, value_parser = parse_vec3)]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     target: Option<DVec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long)]
+    /// Vertical field of view in degrees, between 0 and 180.
+    #[arg(long, allow_negative_numbers = true)]
     fov: Option<f64>,
     /// Number of configurations (light positions).
-    #[arg(long)]
-    configs: Option<usize>,
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    configs: Option<u64>,
     /// Seed of the light positions.
     #[arg(long)]
     seed: Option<u64>,
     /// Square screen resolution.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     screen: Option<u32>,
     /// Square shadow-map resolution.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     map: Option<u32>,
     /// Comma-separated methods: normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized, optimized-argmin.
     #[arg(long, value_delimiter = ',')]
@@ -95,9 +100,25 @@ struct ExperimentArgs {
     /// Report directory.
     #[arg(long, default_value = "report")]
     out: PathBuf,
-    /// Continue an interrupted run in --out without redoing finished configurations.
-    #[arg(long)]
+    /// Continue an interrupted run in --out without redoing finished
+    /// configurations (refused when a result-changing setting, the scene's
+    /// content or the lixel version differs).
+    #[arg(long, conflicts_with = "force")]
     resume: bool,
+    /// Start afresh in an --out that holds a report: the old report is moved
+    /// into --out/replaced-N/, never deleted.
+    #[arg(long)]
+    force: bool,
+    /// Run shard I of N: the configurations k with k mod N = I, reported in
+    /// --out/shard-I-of-N (merge them with `lixel merge`). `env` reads the
+    /// index from SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT or
+    /// JOB_COMPLETION_INDEX (with --shard-count).
+    #[arg(long, value_name = "I/N|env")]
+    shard: Option<String>,
+    /// Number of shards, for `--shard env` under schedulers that do not
+    /// export it (Kubernetes Indexed Jobs: the Job's completions).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    shard_count: Option<u64>,
     /// Measure the frame-time table (the paper's Table 2) instead.
     #[arg(long)]
     timing: bool,
@@ -108,6 +129,10 @@ struct ExperimentArgs {
     /// Frames of the --stability camera path (default: 120, quick preset 12).
     #[arg(long)]
     stability_frames: Option<usize>,
+    /// With --stability: also measure the scene optimizer's stability
+    /// option sets (hysteresis rules, texel snapping, bounded rotation).
+    #[arg(long, requires = "stability")]
+    stability_options: bool,
     /// Frames timed per pipeline and cell of the timing table (rounded up to
     /// whole 15-frame blocks).
     #[arg(long, default_value_t = 60)]
@@ -142,6 +167,23 @@ enum BackendArg {
 }
 
 #[derive(clap::Args)]
+struct MergeArgs {
+    /// Report directories of the shards (`--out/shard-I-of-N` of each).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Directory of the merged report.
+    #[arg(long)]
+    out: PathBuf,
+    /// Write the report even when configurations are missing (it is marked
+    /// partial and lists them).
+    #[arg(long)]
+    allow_missing: bool,
+    /// Move a previous report in --out aside (into --out/replaced-N/).
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(clap::Args)]
 struct MethodsArgs {
     /// Light direction (directional) or position (--point), x,y,z.
     #[arg(long, value_parser = parse_vec3, default_value = "0.4,-1,0.2", allow_hyphen_values = true)]
@@ -158,11 +200,25 @@ struct MethodsArgs {
 }
 
 fn parse_vec3(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> =
-        s.split(',').map(|c| c.trim().parse::<f64>().map_err(|e| e.to_string())).collect::<Result<_, _>>()?;
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f64>().map_err(|_| format!("{:?} is not a number (expected x,y,z)", c.trim())))
+        .collect::<Result<_, _>>()?;
     match v[..] {
-        [x, y, z] => Ok(DVec3::new(x, y, z)),
-        _ => Err("expected x,y,z".into()),
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(x, y, z)),
+        [_, _, _] => Err("x,y,z must be finite".into()),
+        _ => Err(format!("expected three numbers x,y,z, got {}", v.len())),
+    }
+}
+
+/// `--shard`: `I/N`, or `env` for the scheduler's variables.
+fn shard(args: &ExperimentArgs) -> Result<Option<Shard>, String> {
+    let count = args.shard_count.map(|c| usize::try_from(c).unwrap_or(usize::MAX));
+    match args.shard.as_deref() {
+        None if count.is_some() => Err("--shard-count needs --shard env".into()),
+        None => Ok(None),
+        Some("env") => Shard::from_env(|name| std::env::var(name).ok(), count).map(Some).map_err(|e| e.to_string()),
+        Some(text) => Shard::parse(text).map(Some).map_err(|e| e.to_string()),
     }
 }
 
@@ -178,14 +234,19 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     c.eye = args.eye.or(c.eye);
     c.target = args.target.or(c.target);
     c.fov_y_degrees = args.fov.unwrap_or(c.fov_y_degrees);
-    c.configs = args.configs.unwrap_or(c.configs);
+    c.configs = args.configs.map_or(c.configs, |n| usize::try_from(n).unwrap_or(usize::MAX));
     c.seed = args.seed.unwrap_or(c.seed);
     c.screen = args.screen.unwrap_or(c.screen);
     c.map = args.map.unwrap_or(c.map);
     if let Some(names) = &args.methods {
         c.methods = names
             .iter()
-            .map(|n| MethodKind::parse(n).ok_or_else(|| format!("unknown method {n:?}")))
+            .map(|n| {
+                MethodKind::parse(n.trim()).ok_or_else(|| {
+                    let valid: Vec<&str> = MethodKind::ALL.iter().map(|m| m.name()).collect();
+                    format!("--methods: unknown method {n:?}; valid methods: {}", valid.join(", "))
+                })
+            })
             .collect::<Result<_, _>>()?;
     }
     if let Some(t) = args.truth {
@@ -194,6 +255,8 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     c.equivalence_configs = args.equivalence.unwrap_or(c.equivalence_configs);
     c.out.clone_from(&args.out);
     c.resume = args.resume;
+    c.force = args.force;
+    c.shard = shard(args)?;
     Ok(c)
 }
 
@@ -245,18 +308,23 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let (device, queue) = (&gpu.device, &gpu.queue);
     eprintln!("adapter: {}", gpu.describe());
     if args.stability {
-        let mut path = experiment::stability::CameraPath::preset(args.preset);
+        use experiment::stability::{self, Variant};
+        let mut path = stability::CameraPath::preset(args.preset);
         path.frames = args.stability_frames.unwrap_or(path.frames);
-        eprintln!("stability: {} methods x {} frames...", config.methods.len(), path.frames);
+        let mut variants: Vec<Variant> = config.methods.iter().map(|&m| Variant::of(m)).collect();
+        if args.stability_options {
+            variants.extend(Variant::optimizer_option_sets());
+        }
+        eprintln!("stability: {} methods and option sets x {} frames...", variants.len(), path.frames);
         let quiet = args.quiet;
         let mut progress = |done: usize, total: usize| {
             if !quiet && (done % 10 == 0 || done == total) {
                 eprintln!("  {done}/{total} frames");
             }
         };
-        let rows =
-            experiment::stability::measure(&config, &path, device, queue, &mut progress).map_err(|e| e.to_string())?;
-        let md = experiment::stability::write_report(&config.out, &config, &path, &rows).map_err(|e| e.to_string())?;
+        let rows = stability::measure_variants(&config, &variants, &path, device, queue, &mut progress)
+            .map_err(|e| e.to_string())?;
+        let md = stability::write_report(&config.out, &config, &path, &rows).map_err(|e| e.to_string())?;
         println!("{md}\n(written to {})", config.out.display());
         return Ok(());
     }
@@ -291,12 +359,12 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
         let table = experiment::timing_markdown(&rows);
         std::fs::create_dir_all(&config.out).map_err(|e| e.to_string())?;
         let path = config.out.join("timing.md");
-        std::fs::write(&path, &table).map_err(|e| format!("{}: {e}", path.display()))?;
+        experiment::write_atomic(&path, table.as_bytes()).map_err(|e| e.to_string())?;
         println!("{table}\n(written to {})", path.display());
         return Ok(());
     }
     let bar = (!args.quiet).then(|| {
-        let bar = indicatif::ProgressBar::new(config.configs as u64);
+        let bar = indicatif::ProgressBar::new(0);
         bar.set_style(
             indicatif::ProgressStyle::with_template(
                 "{elapsed_precise} [{bar:40}] {pos}/{len} configurations, ETA {eta}",
@@ -306,17 +374,47 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
         bar
     });
     let mut progress = |p: Progress| {
+        if let Some(index) = p.zero_pixels {
+            let warning = format!(
+                "warning: configuration {index} counted 0 pixels (no visible receiver faces its light; check --eye/--target)"
+            );
+            match &bar {
+                Some(bar) => bar.println(warning),
+                None => eprintln!("{warning}"),
+            }
+        }
         if let Some(bar) = &bar {
+            bar.set_length(p.total as u64);
             bar.set_position(p.done as u64);
         }
     };
-    let summary = experiment::run(&config, device, queue, &mut progress).map_err(|e| e.to_string())?;
+    let result = experiment::run(&config, device, queue, &mut progress);
     if let Some(bar) = bar {
         bar.finish();
     }
-    let report = std::fs::read_to_string(config.out.join("report.md")).unwrap_or_default();
+    let summary = result.map_err(|e| e.to_string())?;
+    let dir = experiment::report_dir(&config);
+    print_report(&dir, &summary);
+    Ok(())
+}
+
+fn print_report(dir: &std::path::Path, summary: &experiment::Summary) {
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap_or_default();
     println!("{report}");
-    eprintln!("report in {} ({:.1} s)", config.out.display(), summary.elapsed.as_secs_f64());
+    for w in &summary.warnings {
+        eprintln!("warning: {w}");
+    }
+    eprintln!("report in {} ({:.1} s)", dir.display(), summary.elapsed.as_secs_f64());
+}
+
+fn run_merge(args: &MergeArgs) -> Result<(), String> {
+    let gpu = gpu(BackendArg::Auto)?;
+    let options = MergeOptions { out: args.out.clone(), allow_missing: args.allow_missing, force: args.force };
+    let summary = experiment::merge(&args.dirs, &options, &gpu.device, &gpu.queue).map_err(|e| e.to_string())?;
+    print_report(&args.out, &summary);
+    if !summary.missing.is_empty() {
+        eprintln!("warning: partial report: {} configurations missing", summary.missing.len());
+    }
     Ok(())
 }
 
@@ -371,6 +469,7 @@ fn main() -> ExitCode {
     ensure_runtime_dir();
     let result = match &cli.command {
         Command::Experiment(args) => run_experiment(args),
+        Command::Merge(args) => run_merge(args),
         Command::Methods(args) => run_methods(args),
     };
     match result {

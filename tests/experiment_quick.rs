@@ -29,7 +29,7 @@ fn quick_preset_writes_a_consistent_report_deterministically_and_resumes() {
 
     let c = config(&first);
     let summary = experiment::run(&c, &device, &queue, &mut |_| {}).unwrap();
-    for file in ["summary.csv", "configs.csv", "report.md", "settings.txt", "sorted-errors.png"] {
+    for file in ["summary.csv", "configs.csv", "report.md", "settings.json", "sorted-errors.png", "equivalence.png"] {
         assert!(first.join(file).is_file(), "{file} missing");
     }
     let images = std::fs::read_dir(first.join("images")).unwrap().count();

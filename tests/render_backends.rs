@@ -17,6 +17,24 @@ const MAX_DISAGREEMENT: f64 = 0.002;
 /// (the drivers interpolate depth with different rounding).
 const MAX_DEPTH_DIFFERENCE: f32 = 1e-5;
 
+/// Texels on a caster silhouette (a depth jump to a 4-neighbour) where the
+/// drivers' coverage rules may pick the other surface; strongly warped maps
+/// (PSM) have long silhouettes of thin texels. Limit on those, of all texels.
+const MAX_EDGE_DISAGREEMENT: f64 = 0.01;
+/// Depth step between neighbouring texels that marks a silhouette.
+const EDGE_JUMP: f32 = 1e-3;
+
+fn on_edge(map: &lixel::render::DepthImage, i: usize) -> bool {
+    let (w, h) = (map.width as usize, map.height as usize);
+    let (x, y) = (i % w, i / w);
+    let d = map.depth[i];
+    let near = |nx: usize, ny: usize| (map.depth[ny * w + nx] - d).abs() > EDGE_JUMP;
+    (x > 0 && near(x - 1, y))
+        || (x + 1 < w && near(x + 1, y))
+        || (y > 0 && near(x, y - 1))
+        || (y + 1 < h && near(x, y + 1))
+}
+
 fn both() -> Option<(Gpu, Gpu)> {
     let vulkan = render_common::gpu_on(Some(wgpu::Backends::VULKAN))?;
     let gl = render_common::gpu_on(Some(wgpu::Backends::GL))?;
@@ -64,12 +82,25 @@ fn vulkan_and_gl_masks_agree() {
             let (da, db) = (a.read_shadow_map(light).unwrap(), b.read_shadow_map(light).unwrap());
             let texels = da.depth.len();
             let delta = |(x, y): (&f32, &f32)| (x - y).abs();
-            let off = da.depth.iter().zip(&db.depth).filter(|&p| delta(p) > MAX_DEPTH_DIFFERENCE).count();
+            let off = |i: usize| (da.depth[i] - db.depth[i]).abs() > MAX_DEPTH_DIFFERENCE;
+            let (edge, interior) = (0..texels).filter(|&i| off(i)).partition::<Vec<_>, _>(|&i| on_edge(&da, i));
             let largest = da.depth.iter().zip(&db.depth).map(delta).fold(0.0, f32::max);
             eprintln!(
-                "{name} light {light}: {off} of {texels} shadow-map texels differ (largest difference {largest:e})"
+                "{name} light {light}: {} of {texels} shadow-map texels differ away from depth edges, {} on edges \
+                 (largest difference {largest:e})",
+                interior.len(),
+                edge.len()
             );
-            assert!(off as f64 <= MAX_DISAGREEMENT * texels as f64, "{name} light {light}: {off} texels differ");
+            assert!(
+                interior.len() as f64 <= MAX_DISAGREEMENT * texels as f64,
+                "{name} light {light}: {} texels away from depth edges differ",
+                interior.len()
+            );
+            assert!(
+                edge.len() as f64 <= MAX_EDGE_DISAGREEMENT * texels as f64,
+                "{name} light {light}: {} edge texels differ",
+                edge.len()
+            );
         }
     }
 }

@@ -15,9 +15,17 @@
 //!    truth. One bias policy ([`ShadowBias`]'s
 //!    default) serves every method.
 
+mod finish;
 pub mod framing;
+mod guard;
+mod identity;
 mod images;
+mod merge;
+mod plots;
 mod report;
+mod rows;
+mod rundir;
+mod shard;
 pub mod stability;
 mod timing;
 
@@ -36,13 +44,19 @@ use crate::{
     Camera, Light, LightMatrix, LixelError, Method, Parameterization, PsmOptions, ShadowMapSize, ShadowProblem,
 };
 
+pub use identity::{Identity, RESULT_NEUTRAL_SETTINGS};
 pub use images::error_overlay;
-pub use report::{markdown, ConfigRow, MethodSummary, Summary};
+pub use merge::{merge, MergeOptions};
+pub use report::{markdown, MethodSummary, Summary};
+pub use rows::ConfigRow;
+pub use rundir::{report_dir, write_atomic};
+pub use shard::{Shard, ShardError};
 pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
 
 /// A method of the experiment: one of the library's [`Method`]s, the
 /// scene-optimized one with either search.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum MethodKind {
     /// Uniform around all receivers.
     Normal,
@@ -51,6 +65,7 @@ pub enum MethodKind {
     /// Focused with world-fixed axes and a texel-snapped grid.
     FocusedSnapped,
     /// Light-space perspective.
+    #[serde(rename = "lispsm")]
     LiSpsm,
     /// Perspective shadow maps (near plane from the nearest visible depth).
     Psm,
@@ -107,7 +122,8 @@ impl MethodKind {
 }
 
 /// Which ground truth the counts use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Truth {
     /// Exact ray casting (independent of every method). The default.
     #[value(name = "raytrace")]
@@ -119,7 +135,8 @@ pub enum Truth {
 }
 
 /// Point lights on a distant hemisphere, or directional lights from it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum LightKind {
     /// Point lights (the paper's setting).
     Point,
@@ -128,7 +145,8 @@ pub enum LightKind {
 }
 
 /// Where the scene comes from.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum SceneSource {
     /// The procedural scene with this triangle budget.
     Builtin {
@@ -144,8 +162,10 @@ pub enum SceneSource {
     },
 }
 
-/// Everything an experiment run depends on.
-#[derive(Clone, Debug, PartialEq)]
+/// Everything an experiment run depends on. Serialized (without `out`,
+/// `resume` and `force`) as the `settings` of `settings.json`, the run's
+/// identity ([`Identity`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ExperimentConfig {
     /// The scene.
     pub scene: SceneSource,
@@ -179,10 +199,19 @@ pub struct ExperimentConfig {
     pub equivalence_configs: usize,
     /// Focused map resolutions tried for the equivalence.
     pub equivalence_ladder: Vec<u32>,
+    /// Run only the configurations `k` with `k mod count = index`; the
+    /// report goes to `out/shard-I-of-N` (see [`Shard`]).
+    pub shard: Option<Shard>,
     /// Report directory.
+    #[serde(skip)]
     pub out: PathBuf,
     /// Continue an interrupted run.
+    #[serde(skip)]
     pub resume: bool,
+    /// Move a previous report in `out` aside (into `out/replaced-N/`) instead
+    /// of refusing to start.
+    #[serde(skip)]
+    pub force: bool,
 }
 
 /// Named presets.
@@ -216,8 +245,10 @@ impl ExperimentConfig {
             max_optimize_frames: 12,
             equivalence_configs: 10,
             equivalence_ladder: vec![400, 500, 640, 800, 1000, 1250, 1600, 2000, 2500, 3200, 4000],
+            shard: None,
             out: PathBuf::from("report"),
             resume: false,
+            force: false,
         };
         match preset {
             Preset::Default => base,
@@ -269,6 +300,71 @@ pub enum ExperimentError {
     /// The camera or a light is invalid.
     #[error("solver: {0}")]
     Solver(#[from] LixelError),
+    /// `out` holds a report and neither `resume` nor `force` was given.
+    #[error(
+        "{} already holds a report; pass --resume to continue it, --force to move it aside (into {}/replaced-N/), or another --out",
+        dir.display(), dir.display()
+    )]
+    ReportExists {
+        /// The report directory.
+        dir: PathBuf,
+    },
+    /// Another run holds the report directory's lock.
+    #[error("{} is in use by another lixel run ({}); wait for it or choose another --out", dir.display(), pid.map_or_else(|| "PID unknown".to_string(), |p| format!("PID {p}")))]
+    Locked {
+        /// The report directory.
+        dir: PathBuf,
+        /// The holder's process id, when it recorded one.
+        pid: Option<u32>,
+    },
+    /// `--resume` or `merge` met a report made with different, result-changing settings.
+    #[error("{context}: {setting} differs: recorded {recorded}, now {now}")]
+    SettingsDiffer {
+        /// What was being checked (a directory and the operation).
+        context: String,
+        /// The setting (and its flag).
+        setting: String,
+        /// The value recorded in `settings.json`.
+        recorded: String,
+        /// The value of this run.
+        now: String,
+    },
+    /// A size is beyond what the device or the machine's memory allows.
+    #[error("{flag} {value} is too large: {limit}")]
+    TooLarge {
+        /// The flag (or setting) at fault.
+        flag: &'static str,
+        /// Its value.
+        value: String,
+        /// The limit, with its source.
+        limit: String,
+    },
+    /// No configuration counted a single pixel: the camera sees no lit receiver.
+    #[error(
+        "all {configs} configurations counted 0 pixels (no visible receiver faces the light): the camera sees nothing of the scene; aim it with --eye x,y,z and --target x,y,z"
+    )]
+    NothingCounted {
+        /// Configurations run.
+        configs: usize,
+    },
+    /// `merge` found configurations missing or run by more than one shard.
+    #[error("merge: {}{}{}", list("missing configurations", missing), if !missing.is_empty() && !duplicated.is_empty() { "; " } else { "" }, list("configurations in more than one directory", duplicated))]
+    Incomplete {
+        /// Configurations no directory holds.
+        missing: Vec<usize>,
+        /// Configurations more than one directory holds.
+        duplicated: Vec<usize>,
+    },
+}
+
+/// "what: 1, 2, 3" (at most 20 shown), or nothing for an empty list.
+fn list(what: &str, items: &[usize]) -> String {
+    if items.is_empty() {
+        return String::new();
+    }
+    let shown: Vec<String> = items.iter().take(20).map(ToString::to_string).collect();
+    let more = if items.len() > 20 { format!(" and {} more", items.len() - 20) } else { String::new() };
+    format!("{what} {}{more}", shown.join(", "))
 }
 
 impl From<LoopError> for ExperimentError {
@@ -285,8 +381,11 @@ impl From<LoopError> for ExperimentError {
 pub struct Progress {
     /// Configurations finished (resumed ones included).
     pub done: usize,
-    /// Configurations in total.
+    /// Configurations in total (of this shard, when sharded).
     pub total: usize,
+    /// The configuration just finished counted 0 pixels (a warning: the
+    /// camera saw no visible receiver facing that light).
+    pub zero_pixels: Option<usize>,
 }
 
 /// Loads the configured scene.
@@ -564,7 +663,7 @@ impl<'a> Runner<'a> {
             }
         };
         let m = problem.solve(&p)?;
-        let note = m.fallback.map(|f| format!("{f:?}")).unwrap_or_default();
+        let note = m.fallback.map(rows::fallback_note).unwrap_or_default();
         Ok((m, 1, note))
     }
 
@@ -584,7 +683,7 @@ impl<'a> Runner<'a> {
             map: problem.map_size(),
         };
         let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
-        let note = settled.fallbacks[0].map(|f| format!("{f:?}")).unwrap_or_default();
+        let note = settled.fallbacks[0].map(rows::fallback_note).unwrap_or_default();
         Ok((settled.matrices[0], settled.frames, note))
     }
 
@@ -672,8 +771,15 @@ fn nearest_view_depth(camera: &Camera, masks: &ShadowMasks) -> Option<f64> {
 
 /// Runs (or resumes) the whole experiment and writes the report.
 ///
+/// Before any work: the sizes are checked against the device and the
+/// machine's memory, the report directory is locked, a previous report in
+/// it is refused (or moved aside with `force`), and `resume` checks the
+/// recorded identity. With a [`Shard`], only its configurations run and the
+/// report directory holds them for [`merge`].
+///
 /// # Errors
-/// Scene, renderer and I/O failures.
+/// Scene, renderer and I/O failures; every refusal above; and
+/// [`ExperimentError::NothingCounted`] when no configuration counted a pixel.
 pub fn run(
     config: &ExperimentConfig,
     device: &wgpu::Device,
@@ -681,21 +787,35 @@ pub fn run(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, ExperimentError> {
     let started = Instant::now();
+    guard::check(config, &device.limits(), guard::available_memory())?;
+    let identity = Identity::of(config)?;
+    let dir = rundir::RunDir::prepare(config, &identity)?;
+    let mut warnings: Vec<String> = dir
+        .resumed_with
+        .iter()
+        .map(|d| format!("resumed a run that differs in a setting that changes no row: {d}"))
+        .collect();
+    if let Some(moved) = &dir.moved_to {
+        warnings.push(format!("--force: the previous report was moved to {}", moved.display()));
+    }
     let mut runner = Runner::new(config, device, queue)?;
-    let mut writer = report::ConfigWriter::open(config)?;
-    progress(Progress { done: writer.done().len(), total: config.configs });
-    for index in 0..config.configs {
+    let mut writer = rows::ConfigWriter::open(config, &dir, &identity)?;
+    let indices: Vec<usize> = shard::indices(config).collect();
+    let done_here = |w: &rows::ConfigWriter| indices.iter().filter(|i| w.done().contains(i)).count();
+    progress(Progress { done: done_here(&writer), total: indices.len(), zero_pixels: None });
+    for &index in &indices {
         if writer.done().contains(&index) {
             continue;
         }
         let outcome = runner.run_config(index)?;
         writer.append(index, &outcome)?;
-        progress(Progress { done: writer.done().len(), total: config.configs });
+        let counted = outcome.results.iter().filter_map(|(_, r)| r.counts).map(|c| c.counted).max();
+        let zero_pixels = (counted == Some(0)).then_some(index);
+        progress(Progress { done: done_here(&writer), total: indices.len(), zero_pixels });
     }
     let rows = writer.rows().to_vec();
-    let equivalence = report::equivalence(&mut runner, config)?;
-    let mut summary = report::summarize(config, &rows, equivalence, started.elapsed());
-    summary.adapter = crate::render::device::describe(&device.adapter_info());
-    report::write_all(&mut runner, config, &rows, &summary)?;
-    Ok(summary)
+    finish::check_counted(&rows, &mut warnings)?;
+    let completeness =
+        finish::Completeness { adapter: crate::render::device::describe(&device.adapter_info()), ..Default::default() };
+    finish::finish(&mut runner, config, dir.path(), &rows, &completeness, warnings, started)
 }

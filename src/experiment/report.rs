@@ -1,187 +1,18 @@
-//! The experiment's files: `configs.csv` (written as configurations finish,
-//! and read back by `--resume`), `summary.csv`, `report.md`, plots and images.
+//! The experiment's report files from plain data: `summary.csv`,
+//! `report.md`, and (through `plots` and `images`) the plots and pictures.
+//! Nothing here touches the renderer: `finish` collects what the pictures
+//! need first. `configs.csv` is `rows`'s.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::{images, ConfigOutcome, ExperimentConfig, ExperimentError, MethodKind, Runner};
-use crate::Light;
-
-const CONFIGS_HEADER: &str =
-    "config,method,light_x,light_y,light_z,counted,misclassified,false_shadow,false_lit,frames,truth_disagreement,truth_compared,note";
-
-/// One row of `configs.csv`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ConfigRow {
-    /// Configuration index.
-    pub config: usize,
-    /// Method.
-    pub method: MethodKind,
-    /// Light position (point) or the direction it comes from, reversed (directional).
-    pub light: [f64; 3],
-    /// Pixels counted; `None` when the method failed.
-    pub counted: Option<u64>,
-    /// Misclassified pixels.
-    pub misclassified: Option<u64>,
-    /// Lit in the truth, shadowed by the method.
-    pub false_shadow: Option<u64>,
-    /// Shadowed in the truth, lit by the method.
-    pub false_lit: Option<u64>,
-    /// Frames the scene-optimized loop took.
-    pub frames: usize,
-    /// Pixels where the two truths disagree, and pixels compared (when both ran).
-    pub truth: Option<(u64, u64)>,
-    /// Fallback or error.
-    pub note: String,
-}
-
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
-    move |source| ExperimentError::Io { path: path.to_path_buf(), source }
-}
-
-fn opt(v: Option<u64>) -> String {
-    v.map(|v| v.to_string()).unwrap_or_default()
-}
-
-impl ConfigRow {
-    fn to_csv(&self) -> String {
-        let [x, y, z] = self.light;
-        let note = self.note.replace([',', '\n', '"'], ";");
-        format!(
-            "{},{},{x:.6},{y:.6},{z:.6},{},{},{},{},{},{},{},{note}",
-            self.config,
-            self.method.name(),
-            opt(self.counted),
-            opt(self.misclassified),
-            opt(self.false_shadow),
-            opt(self.false_lit),
-            self.frames,
-            opt(self.truth.map(|t| t.0)),
-            opt(self.truth.map(|t| t.1)),
-        )
-    }
-
-    fn parse(line: &str) -> Option<Self> {
-        let f: Vec<&str> = line.splitn(13, ',').collect();
-        if f.len() != 13 {
-            return None;
-        }
-        let num = |s: &str| if s.is_empty() { Some(None) } else { s.parse().ok().map(Some) };
-        let truth = match (num(f[10])?, num(f[11])?) {
-            (Some(a), Some(b)) => Some((a, b)),
-            _ => None,
-        };
-        Some(Self {
-            config: f[0].parse().ok()?,
-            method: MethodKind::parse(f[1])?,
-            light: [f[2].parse().ok()?, f[3].parse().ok()?, f[4].parse().ok()?],
-            counted: num(f[5])?,
-            misclassified: num(f[6])?,
-            false_shadow: num(f[7])?,
-            false_lit: num(f[8])?,
-            frames: f[9].parse().ok()?,
-            truth,
-            note: f[12].to_string(),
-        })
-    }
-}
-
-/// Appends rows to `configs.csv` as configurations finish.
-pub(super) struct ConfigWriter {
-    path: PathBuf,
-    rows: Vec<ConfigRow>,
-    done: BTreeSet<usize>,
-}
-
-fn settings_text(config: &ExperimentConfig) -> String {
-    // Everything that changes a configuration's numbers: not the output
-    // directory, --resume, or the number of configurations (each light is
-    // seeded by its own index, so a run can also be resumed to more of them).
-    let mut c = config.clone();
-    c.out = PathBuf::new();
-    c.resume = false;
-    c.configs = 0;
-    format!("{c:#?}\n")
-}
-
-impl ConfigWriter {
-    /// Creates the report directory; with `resume`, keeps the finished
-    /// configurations of an earlier run with the same settings.
-    pub(super) fn open(config: &ExperimentConfig) -> Result<Self, ExperimentError> {
-        std::fs::create_dir_all(&config.out).map_err(io(&config.out))?;
-        let path = config.out.join("configs.csv");
-        let settings_path = config.out.join("settings.txt");
-        let settings = settings_text(config);
-        let mut rows = Vec::new();
-        if config.resume && path.exists() {
-            let previous = std::fs::read_to_string(&settings_path).unwrap_or_default();
-            if previous != settings {
-                return Err(ExperimentError::Config(format!(
-                    "--resume: {} was made with other settings; use the same flags or another --out",
-                    config.out.display()
-                )));
-            }
-            let text = std::fs::read_to_string(&path).map_err(io(&path))?;
-            rows = text.lines().skip(1).filter_map(ConfigRow::parse).collect();
-        }
-        // Keep only configurations with a row for every method (an
-        // interrupted one is redone).
-        let mut per_config: BTreeMap<usize, usize> = BTreeMap::new();
-        for r in &rows {
-            *per_config.entry(r.config).or_default() += 1;
-        }
-        let done: BTreeSet<usize> =
-            per_config.into_iter().filter(|&(_, n)| n == config.methods.len()).map(|(c, _)| c).collect();
-        rows.retain(|r| done.contains(&r.config));
-        std::fs::write(&settings_path, settings).map_err(io(&settings_path))?;
-        let mut text = format!("{CONFIGS_HEADER}\n");
-        for r in &rows {
-            text.push_str(&r.to_csv());
-            text.push('\n');
-        }
-        std::fs::write(&path, text).map_err(io(&path))?;
-        Ok(Self { path, rows, done })
-    }
-
-    pub(super) fn done(&self) -> &BTreeSet<usize> {
-        &self.done
-    }
-
-    /// Every row, sorted by configuration then method order.
-    pub(super) fn rows(&mut self) -> &[ConfigRow] {
-        self.rows.sort_by_key(|r| (r.config, r.method));
-        &self.rows
-    }
-
-    pub(super) fn append(&mut self, index: usize, outcome: &ConfigOutcome) -> Result<(), ExperimentError> {
-        let light = match outcome.light {
-            Light::Directional { direction } => (-direction).to_array(),
-            Light::Point { position } | Light::Spot { position, .. } => position.to_array(),
-        };
-        let mut file = std::fs::OpenOptions::new().append(true).open(&self.path).map_err(io(&self.path))?;
-        for (method, result) in &outcome.results {
-            let row = ConfigRow {
-                config: index,
-                method: *method,
-                light,
-                counted: result.counts.map(|c| c.counted),
-                misclassified: result.counts.map(|c| c.misclassified()),
-                false_shadow: result.counts.map(|c| c.false_shadow),
-                false_lit: result.counts.map(|c| c.false_lit),
-                frames: result.frames,
-                truth: outcome.truth_disagreement,
-                note: result.note.clone(),
-            };
-            writeln!(file, "{}", row.to_csv()).map_err(io(&self.path))?;
-            self.rows.push(row);
-        }
-        self.done.insert(index);
-        Ok(())
-    }
-}
+use super::finish::{equivalence_count, Completeness};
+use super::images::{self, Picture};
+use super::rows::{csv_text, ConfigRow};
+use super::rundir::write_atomic;
+use super::{plots, ExperimentConfig, ExperimentError, MethodKind};
 
 /// Per-method statistics.
 #[derive(Clone, Debug, PartialEq)]
@@ -219,6 +50,11 @@ pub struct Summary {
     pub ladder: Vec<(u32, f64)>,
     /// Wall time of the run.
     pub elapsed: Duration,
+    /// Warnings (configurations that counted 0 pixels, accepted setting
+    /// differences of a resume); also in `report.md`.
+    pub warnings: Vec<String>,
+    /// Configurations without rows (a merge with `--allow-missing`).
+    pub missing: Vec<usize>,
     /// The adapter and backend it ran on (e.g. `llvmpipe (...) (vulkan)`).
     pub adapter: String,
 }
@@ -226,26 +62,9 @@ pub struct Summary {
 /// The resolution-equivalence figures (empty when disabled).
 pub(super) type Equivalence = (Vec<(u32, f64, Option<f64>)>, Vec<(u32, f64)>);
 
-pub(super) fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equivalence, ExperimentError> {
-    let count = config.equivalence_configs.min(config.configs);
-    if count == 0 || !config.methods.contains(&MethodKind::Optimized) {
-        return Ok((Vec::new(), Vec::new()));
-    }
-    let mut ladder = Vec::new();
-    for &size in &config.equivalence_ladder {
-        ladder.push((size, runner.mean_at_resolution(MethodKind::Focused, size, count)?));
-    }
-    let mut result = Vec::new();
-    for size in [400u32, 1024] {
-        let mean = runner.mean_at_resolution(MethodKind::Optimized, size, count)?;
-        result.push((size, mean, crossing(&ladder, mean)));
-    }
-    Ok((result, ladder))
-}
-
 /// The focused size whose mean error equals `target`, interpolated in
 /// log-log between the ladder's sizes; `None` outside the ladder.
-fn crossing(ladder: &[(u32, f64)], target: f64) -> Option<f64> {
+pub(super) fn crossing(ladder: &[(u32, f64)], target: f64) -> Option<f64> {
     ladder.windows(2).find_map(|w| {
         let ((s0, e0), (s1, e1)) = (w[0], w[1]);
         let (lo, hi) = (e0.min(e1), e0.max(e1));
@@ -265,6 +84,7 @@ pub(super) fn summarize(
     rows: &[ConfigRow],
     equivalence: Equivalence,
     elapsed: Duration,
+    warnings: Vec<String>,
 ) -> Summary {
     let per_method = |m: MethodKind| -> BTreeMap<usize, u64> {
         rows.iter().filter(|r| r.method == m).filter_map(|r| Some((r.config, r.misclassified?))).collect()
@@ -338,21 +158,14 @@ pub(super) fn summarize(
         equivalence: equivalence.0,
         ladder: equivalence.1,
         elapsed,
+        warnings,
+        missing: Vec::new(),
         adapter: String::new(),
     }
 }
 
-fn write(path: &Path, text: &str) -> Result<(), ExperimentError> {
-    std::fs::write(path, text).map_err(io(path))
-}
-
-pub(super) fn write_all(
-    runner: &mut Runner<'_>,
-    config: &ExperimentConfig,
-    rows: &[ConfigRow],
-    summary: &Summary,
-) -> Result<(), ExperimentError> {
-    let out = &config.out;
+/// `summary.csv`'s text.
+fn summary_csv(summary: &Summary) -> String {
     let mut csv = String::from(
         "method,configs,mean_misclassified,total_misclassified,percent_more_than_optimized,median_misclassified,failures,mean_frames\n",
     );
@@ -370,11 +183,51 @@ pub(super) fn write_all(
             m.mean_frames
         );
     }
-    write(&out.join("summary.csv"), &csv)?;
-    images::sorted_curves(&out.join("sorted-errors.png"), config, rows)?;
-    let pictures = images::extremes(runner, config, rows)?;
-    write(&out.join("report.md"), &markdown(config, summary, &pictures))?;
-    Ok(())
+    csv
+}
+
+/// Every file of a finished report in `dir`: `configs.csv` (rewritten in
+/// canonical order, so a resumed or merged run matches an uninterrupted
+/// one byte for byte), `summary.csv`, the plots, the pictures, `report.md`.
+pub(super) fn write_all(
+    dir: &Path,
+    config: &ExperimentConfig,
+    rows: &[ConfigRow],
+    summary: &Summary,
+    pictures: &[Picture],
+    completeness: &Completeness,
+) -> Result<(), ExperimentError> {
+    write_atomic(&dir.join("configs.csv"), csv_text(rows).as_bytes())?;
+    write_atomic(&dir.join("summary.csv"), summary_csv(summary).as_bytes())?;
+    plots::sorted_errors(&dir.join("sorted-errors.png"), config, rows)?;
+    if !summary.ladder.is_empty() {
+        plots::equivalence(&dir.join("equivalence.png"), summary)?;
+    }
+    let written = images::write_pictures(dir, pictures)?;
+    let mut md = markdown(config, summary, &written);
+    if !completeness.merged_from.is_empty() {
+        let dirs: Vec<String> = completeness.merged_from.iter().map(|d| format!("`{}`", d.display())).collect();
+        let _ = writeln!(md, "\nMerged from {} shard directories: {}.", dirs.len(), dirs.join(", "));
+    }
+    write_atomic(&dir.join("report.md"), md.as_bytes())
+}
+
+/// A shard's report: its rows (canonical order) and a `report.md` that says
+/// it is one part of a run, with its own partial table.
+pub(super) fn write_shard(
+    dir: &Path,
+    config: &ExperimentConfig,
+    rows: &[ConfigRow],
+    summary: &Summary,
+) -> Result<(), ExperimentError> {
+    write_atomic(&dir.join("configs.csv"), csv_text(rows).as_bytes())?;
+    let shard = config.shard.map(|s| s.to_string()).unwrap_or_default();
+    let mut md = format!(
+        "# Shard {shard} of a lixel experiment\n\nThis directory holds only the configurations of shard {shard}. \
+         Merge every shard with `lixel merge DIR... --out DIR` for the report; the figures below are this shard's alone.\n\n"
+    );
+    md.push_str(&markdown(config, summary, &[]));
+    write_atomic(&dir.join("report.md"), md.as_bytes())
 }
 
 /// `report.md`: the paper's Table 1 layout, then the rest.
@@ -383,19 +236,32 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
     let names: Vec<&str> = config.methods.iter().map(|m| m.name()).collect();
     let mut md = String::new();
     let _ = writeln!(md, "# Misclassified shadow pixels\n");
+    if !summary.missing.is_empty() {
+        let shown: Vec<String> = summary.missing.iter().map(ToString::to_string).collect();
+        let _ = writeln!(
+            md,
+            "**PARTIAL REPORT: {} of {} configurations are missing ({}); every figure below covers only the others.**\n",
+            summary.missing.len(),
+            config.configs,
+            shown.join(", ")
+        );
+    }
+    for w in &summary.warnings {
+        let _ = writeln!(md, "Warning: {w}\n");
+    }
     let configs = summary.methods.first().map_or(0, |m| m.configs + m.failures);
     let _ = writeln!(
         md,
-        "{configs} configurations ({:?} lights on a hemisphere of radius {} scene diagonals, seed {}), {}x{} screen, {}x{} maps, scene {:?}, truth {:?}. Run time {:.1} s.\n",
-        config.light,
+        "{configs} configurations ({} lights on a hemisphere of radius {} scene diagonals, seed {}), {}x{} screen, {}x{} maps, scene {}, truth {}. Run time {:.1} s.\n",
+        serde_json::to_string(&config.light).unwrap_or_default().trim_matches('"'),
         config.light_distance,
         config.seed,
         config.screen,
         config.screen,
         config.map,
         config.map,
-        config.scene,
-        config.truth,
+        serde_json::to_string(&config.scene).unwrap_or_default(),
+        serde_json::to_string(&config.truth).unwrap_or_default().trim_matches('"'),
         summary.elapsed.as_secs_f64()
     );
     if !summary.adapter.is_empty() {
@@ -434,7 +300,7 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
         let _ = writeln!(md, "\nRay casting and the focused 4000² map agree on {:.3}% of counted pixels.", 100.0 * a);
     }
     if !summary.equivalence.is_empty() {
-        let _ = writeln!(md, "\n## Resolution equivalence (first {} configurations)\n", config.equivalence_configs);
+        let _ = writeln!(md, "\n## Resolution equivalence (first {} configurations)\n", equivalence_count(config));
         let _ = writeln!(md, "| scene-optimized map | its mean error | focused map with the same mean error |");
         let _ = writeln!(md, "|---:|---:|---:|");
         for (size, mean, eq) in &summary.equivalence {
@@ -443,9 +309,13 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
         }
         let ladder: Vec<String> = summary.ladder.iter().map(|(s, e)| format!("{s}²: {e:.1}")).collect();
         let _ = writeln!(md, "\nFocused ladder: {}.", ladder.join(", "));
+        let _ = writeln!(md, "\n![resolution equivalence](equivalence.png)");
     }
     let _ = writeln!(md, "\n## Sorted per-configuration errors\n\n![sorted errors](sorted-errors.png)\n");
-    let _ = writeln!(md, "{}\n", images::legend(config));
+    let _ = writeln!(
+        md,
+        "Each line is one method's misclassified pixels per configuration, sorted ascending; the y axis is logarithmic (of 1 + pixels).\n"
+    );
     if !pictures.is_empty() {
         let _ = writeln!(md, "## Best, median and worst configuration per method\n");
         let _ = writeln!(md, "Grey: correct (light = lit, dark = shadow); red: false shadow; blue: false light.\n");
@@ -455,4 +325,32 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Preset;
+    use super::*;
+
+    #[test]
+    fn the_equivalence_heading_gives_the_configurations_actually_used() {
+        let config =
+            ExperimentConfig { configs: 6, equivalence_configs: 100_000, ..ExperimentConfig::preset(Preset::Quick) };
+        let summary = Summary {
+            methods: Vec::new(),
+            worst: Vec::new(),
+            truth_agreement: None,
+            equivalence: vec![(400, 10.0, None)],
+            ladder: vec![(256, 20.0)],
+            elapsed: Duration::ZERO,
+            warnings: vec!["a warning".into()],
+            missing: vec![3],
+            adapter: String::new(),
+        };
+        let md = markdown(&config, &summary, &[]);
+        assert!(md.contains("Resolution equivalence (first 6 configurations)"), "{md}");
+        assert!(
+            md.contains("PARTIAL REPORT: 1 of 6 configurations are missing (3)") && md.contains("Warning: a warning")
+        );
+    }
 }

@@ -25,9 +25,9 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 
-use super::{Counts, ExperimentConfig, ExperimentError, MethodKind, Preset, Runner, Truth};
+use super::{write_atomic, Counts, ExperimentConfig, ExperimentError, MethodKind, Preset, Runner, Truth};
 use crate::mesh::ShadowMasks;
-use crate::optimize::{OptimizeOptions, SearchStrategy};
+use crate::optimize::{AcceptMeasure, OptimizeOptions, SearchStrategy, TexelSnap};
 use crate::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
 use crate::{Camera, ShadowMapSize};
 
@@ -126,11 +126,73 @@ impl Flicker {
     }
 }
 
+/// One curve of the report: a method and, for the scene-optimized ones,
+/// the optimizer's options (the trade-off plot has one point per method and
+/// option set).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variant {
+    /// The method.
+    pub method: MethodKind,
+    /// The option set's name in the report (`default` for the defaults).
+    pub options: String,
+    /// The optimizer's options (scene-optimized methods only; `None` for
+    /// the defaults with the method's search).
+    pub optimize: Option<OptimizeOptions>,
+}
+
+impl Variant {
+    /// A method with its default options.
+    #[must_use]
+    pub fn of(method: MethodKind) -> Self {
+        Self { method, options: "default".into(), optimize: None }
+    }
+
+    /// The scene optimizer (paper search) with `optimize`, named `options`.
+    #[must_use]
+    pub fn optimized(options: &str, optimize: OptimizeOptions) -> Self {
+        Self { method: MethodKind::Optimized, options: options.into(), optimize: Some(optimize) }
+    }
+
+    /// The option sets of the scene optimizer that `--stability-options`
+    /// measures: the paper's rule and its alternatives, texel snapping and
+    /// bounded rotation, alone and together.
+    #[must_use]
+    pub fn optimizer_option_sets() -> Vec<Self> {
+        let paper = OptimizeOptions::paper();
+        let snap = Some(TexelSnap::DEFAULT);
+        vec![
+            Self::optimized("paper", paper.clone()),
+            Self::optimized("median 1.0", OptimizeOptions { accept_ratio: 1.0, ..paper.clone() }),
+            Self::optimized("median 0.5", OptimizeOptions { accept_ratio: 0.5, ..paper.clone() }),
+            Self::optimized(
+                "objective 0.8",
+                OptimizeOptions { accept_measure: AcceptMeasure::Objective, ..paper.clone() },
+            ),
+            Self::optimized("snap", OptimizeOptions { snap, ..paper.clone() }),
+            Self::optimized("turn 5", OptimizeOptions { max_turn_degrees: Some(5.0), ..paper.clone() }),
+            Self::optimized("snap + turn 5", OptimizeOptions { snap, max_turn_degrees: Some(5.0), ..paper.clone() }),
+            Self::optimized("snap + median 0.5", OptimizeOptions { snap, accept_ratio: 0.5, ..paper }),
+        ]
+    }
+
+    /// `method` or `method [options]`.
+    #[must_use]
+    pub fn label(&self) -> String {
+        if self.options == "default" {
+            self.method.name().to_string()
+        } else {
+            format!("{} [{}]", self.method.name(), self.options)
+        }
+    }
+}
+
 /// One method's figures along the path.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilityRow {
     /// The method.
     pub method: MethodKind,
+    /// Its option set's name (`default` for the defaults).
+    pub options: String,
     /// Flicker share per frame transition (`frames - 1` values).
     pub flicker: Vec<f64>,
     /// Misclassified pixels per frame.
@@ -178,6 +240,14 @@ enum Source {
     Loop(Box<ShadowLoop>),
 }
 
+impl StabilityRow {
+    /// `method` or `method [options]`.
+    #[must_use]
+    pub fn label(&self) -> String {
+        Variant { method: self.method, options: self.options.clone(), optimize: None }.label()
+    }
+}
+
 /// Runs every method of `config` along `path` with light 0 of the
 /// configuration ([`super::light_for`]) and the ray-cast truth.
 ///
@@ -191,6 +261,26 @@ pub fn measure(
     queue: &wgpu::Queue,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<StabilityRow>, ExperimentError> {
+    let variants: Vec<Variant> = config.methods.iter().map(|&m| Variant::of(m)).collect();
+    measure_variants(config, &variants, path, device, queue, progress)
+}
+
+/// [`measure`] for each of `variants` (methods with option sets) instead of
+/// `config.methods`.
+///
+/// # Errors
+/// As [`measure`]; no variants is [`ExperimentError::Config`].
+pub fn measure_variants(
+    config: &ExperimentConfig,
+    variants: &[Variant],
+    path: &CameraPath,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<StabilityRow>, ExperimentError> {
+    if variants.is_empty() {
+        return Err(ExperimentError::Config("no method to measure".into()));
+    }
     let config = ExperimentConfig { truth: Truth::RayCast, ..config.clone() };
     let mut runner = Runner::new(&config, device, queue)?;
     let start = runner.camera;
@@ -202,9 +292,10 @@ pub fn measure(
         cameras.iter().map(|c| caster.trace_masks(c, &[light], config.screen, config.screen)).collect()
     };
     let map = ShadowMapSize::square(config.map);
-    let total = config.methods.len() * path.frames;
+    let total = variants.len() * path.frames;
     let mut rows = Vec::new();
-    for (m, &method) in config.methods.iter().enumerate() {
+    for (m, variant) in variants.iter().enumerate() {
+        let method = variant.method;
         let mut source = match method {
             MethodKind::Optimized | MethodKind::OptimizedArgmin => {
                 let strategy = if method == MethodKind::Optimized {
@@ -212,7 +303,8 @@ pub fn measure(
                 } else {
                     SearchStrategy::NelderMead { max_iterations: 150 }
                 };
-                let optimize = OptimizeOptions { strategy, ..Default::default() };
+                let optimize = variant.optimize.clone().unwrap_or_default();
+                let optimize = OptimizeOptions { strategy, ..optimize };
                 let mut shadows =
                     ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() })?;
                 let view = LoopView {
@@ -226,7 +318,8 @@ pub fn measure(
             }
             other => Source::Fixed(other),
         };
-        let mut row = StabilityRow { method, flicker: Vec::new(), misclassified: Vec::new() };
+        let mut row =
+            StabilityRow { method, options: variant.options.clone(), flicker: Vec::new(), misclassified: Vec::new() };
         let mut previous: Option<ShadowMasks> = None;
         for (f, camera) in cameras.iter().enumerate() {
             runner.camera = *camera;
@@ -268,32 +361,25 @@ pub fn write_report(
     path: &CameraPath,
     rows: &[StabilityRow],
 ) -> Result<String, ExperimentError> {
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |source| ExperimentError::Io { path: p, source }
-    };
-    std::fs::create_dir_all(out).map_err(io(out))?;
-    let mut csv = String::from("method,mean_flicker,p95_flicker,mean_misclassified,frames\n");
+    std::fs::create_dir_all(out).map_err(|source| ExperimentError::Io { path: out.to_path_buf(), source })?;
+    let mut csv = String::from("method,mean_flicker,p95_flicker,mean_misclassified,frames,options\n");
     for r in rows {
         let _ = writeln!(
             csv,
-            "{},{:.6},{:.6},{:.1},{}",
+            "{},{:.6},{:.6},{:.1},{},{}",
             r.method.name(),
             r.mean_flicker(),
             r.p95_flicker(),
             r.mean_misclassified(),
-            r.misclassified.len()
+            r.misclassified.len(),
+            r.options
         );
     }
-    let file = out.join("stability.csv");
-    std::fs::write(&file, &csv).map_err(io(&file))?;
+    write_atomic(&out.join("stability.csv"), csv.as_bytes())?;
     let md = markdown(config, path, rows);
-    let file = out.join("stability.md");
-    std::fs::write(&file, &md).map_err(io(&file))?;
-    let file = out.join("stability_tradeoff.svg");
-    std::fs::write(&file, tradeoff_svg(rows)).map_err(io(&file))?;
-    let file = out.join("stability_frames.svg");
-    std::fs::write(&file, frames_svg(rows)).map_err(io(&file))?;
+    write_atomic(&out.join("stability.md"), md.as_bytes())?;
+    write_atomic(&out.join("stability_tradeoff.svg"), tradeoff_svg(rows).as_bytes())?;
+    write_atomic(&out.join("stability_frames.svg"), frames_svg(rows).as_bytes())?;
     Ok(md)
 }
 
@@ -319,7 +405,7 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
         let _ = writeln!(
             md,
             "| {} | {:.3} % | {:.3} % | {:.0} |",
-            r.method.name(),
+            r.label(),
             100.0 * r.mean_flicker(),
             100.0 * r.p95_flicker(),
             r.mean_misclassified()
@@ -330,8 +416,8 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
 }
 
 fn color(method: MethodKind) -> String {
-    let c = super::images::method_color(method).0;
-    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+    let c = super::plots::color(method);
+    format!("#{:02x}{:02x}{:02x}", c.0, c.1, c.2)
 }
 
 const W: f64 = 640.0;
@@ -395,7 +481,7 @@ fn tradeoff_svg(rows: &[StabilityRow]) -> String {
             color(r.method),
             x + 7.0,
             y - 7.0,
-            r.method.name()
+            r.label()
         );
     }
     s.push_str("</svg>\n");
@@ -428,7 +514,7 @@ fn frames_svg(rows: &[StabilityRow]) -> String {
             W - 150.0,
             50.0 + 14.0 * k as f64,
             color(r.method),
-            r.method.name()
+            r.label()
         );
     }
     s.push_str("</svg>\n");
@@ -477,6 +563,7 @@ mod tests {
     fn percentile_and_means() {
         let row = StabilityRow {
             method: MethodKind::Focused,
+            options: "default".into(),
             flicker: (1..=20).map(|i| f64::from(i) / 100.0).collect(),
             misclassified: vec![10, 20, 30],
         };

@@ -2,6 +2,7 @@
 //! cut by half-spaces.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
 
@@ -342,7 +343,7 @@ impl ConvexPolyhedron {
                 vertices.push(v);
             }
         }
-        let mut cuts: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut cuts: IndexMap<(usize, usize), usize> = IndexMap::default();
         let mut faces = Vec::with_capacity(self.faces.len() + 1);
         for face in &self.faces {
             let mut indices = Vec::with_capacity(face.indices.len() + 1);
@@ -658,9 +659,36 @@ fn box_planes(min: DVec3, max: DVec3) -> [Plane; 6] {
     ]
 }
 
+/// A hash map keyed by vertex indices. The keys are small trusted integers
+/// and the maps are only looked up, never iterated (results do not depend on
+/// hashing), so a multiply-rotate hash replaces SipHash, which was ~40% of a
+/// focused solve (callgrind, issue 15).
+type IndexMap<K, V> = HashMap<K, V, BuildHasherDefault<IndexHasher>>;
+
+/// Multiply-rotate hasher for [`IndexMap`].
+#[derive(Clone, Copy, Default)]
+struct IndexHasher(u64);
+
+impl Hasher for IndexHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+}
+
 /// Maps each directed edge of the faces to the index of its face.
-fn half_edge_faces(faces: &[Face]) -> HashMap<(usize, usize), usize> {
-    let mut map = HashMap::with_capacity(faces.iter().map(|f| f.indices.len()).sum());
+fn half_edge_faces(faces: &[Face]) -> IndexMap<(usize, usize), usize> {
+    let mut map = IndexMap::with_capacity_and_hasher(faces.iter().map(|f| f.indices.len()).sum(), Default::default());
     for (i, face) in faces.iter().enumerate() {
         map.extend(face.edges().map(|edge| (edge, i)));
     }
@@ -681,8 +709,8 @@ fn half_edge_faces(faces: &[Face]) -> HashMap<(usize, usize), usize> {
 /// returns to a vertex already on its path, cut off the loop it closed.
 /// Normally there is one hole with a simple boundary; a boundary touching
 /// itself at a vertex yields several loops.
-fn hole_loops(faces: &[Face], edge_faces: &HashMap<(usize, usize), usize>) -> Vec<Vec<usize>> {
-    let mut next: HashMap<usize, Vec<usize>> = HashMap::new();
+fn hole_loops(faces: &[Face], edge_faces: &IndexMap<(usize, usize), usize>) -> Vec<Vec<usize>> {
+    let mut next: IndexMap<usize, Vec<usize>> = IndexMap::default();
     let mut starts = Vec::new();
     for (a, b) in faces.iter().flat_map(Face::edges) {
         if !edge_faces.contains_key(&(b, a)) {

@@ -56,7 +56,8 @@ const FLOOR_TRIANGLES: usize = 2 * 16 * 16;
 pub const FLOOR_SIZE_IN_RADII: f64 = 8.0;
 
 /// Which file axis points up.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum UpAxis {
     /// `+y` up (OBJ's usual convention and glTF's rule). No change.
@@ -68,7 +69,7 @@ pub enum UpAxis {
 }
 
 /// How to turn a file into a scene.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SceneOptions {
     /// The file's up axis.
     pub up: UpAxis,

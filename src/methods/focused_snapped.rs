@@ -27,8 +27,10 @@ use glam::{DMat3, DVec2, DVec3};
 
 use crate::error::{LixelError, Result};
 use crate::light::LightFrame;
-use crate::matrix::{Fallback, LightMatrix, Method, Placement};
+use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
+use crate::scene::ShadowMapSize;
+use crate::tolerance::Tolerances;
 
 /// Options of [`Parameterization::FocusedSnapped`](super::Parameterization::FocusedSnapped).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,22 +73,19 @@ pub(super) fn solve(problem: &ShadowProblem, options: &FocusedSnappedOptions) ->
     let frame = problem.frame_towards(&receivers);
     let axis = super::uniform_axis(problem, &frame, &receivers, method)?.normalize();
     let basis = image_basis(&frame, axis);
-    let xs: Vec<DVec3> = focus.vertices().iter().map(|&p| frame.homogeneous(p)).collect();
-    let homography = snapped_homography(&xs, axis, basis, problem, options).ok_or(LixelError::NotInFront { method })?;
-    let casters = problem.caster_body(&focus);
-    let placement = Placement {
-        light: *problem.light(),
-        frame,
-        axis,
-        focus: focus.vertices(),
-        depth_points: casters.vertices(),
-        map: problem.map_size(),
-        fit: problem.fit_options(),
-        tolerances: problem.tolerances(),
-        method,
-        fallback: None,
-    };
-    Ok(placement.finish(homography, &xs))
+    // A spot light's apex (a vertex of the body when the light is inside
+    // the bounds) has no direction: left to the other vertices.
+    let points = problem.mappable_vertices(&focus);
+    let xs: Vec<DVec3> = points.iter().map(|&p| frame.homogeneous(p)).collect();
+    let grid =
+        SnapGrid { axis, basis, map: problem.map_size(), steps_per_octave: options.steps_per_octave, margin: 0.0 };
+    let homography =
+        snapped_homography(&frame, problem.tolerances(), &grid, &xs).ok_or(LixelError::NotInFront { method })?;
+    // Depth covers the casters and all of the focus, a vertex at the light
+    // included (as for the other uniform maps).
+    let mut depth_points = problem.caster_body(&focus).vertices().to_vec();
+    depth_points.extend_from_slice(focus.vertices());
+    problem.placement(frame, axis, &points, &depth_points, method, None).finish_checked(homography, &xs)
 }
 
 /// Image-plane axes perpendicular to the unit `axis`, a function of the
@@ -106,40 +105,61 @@ fn image_basis(frame: &LightFrame, axis: DVec3) -> (DVec3, DVec3) {
     }
 }
 
+/// A texel grid fixed by an optical axis and two image-plane directions:
+/// what [`snapped_homography`] snaps to.
+pub(crate) struct SnapGrid {
+    /// The optical axis (unit).
+    pub axis: DVec3,
+    /// Image-plane directions (perpendicular to `axis`, not necessarily to
+    /// each other): the map's `x` and `y` are `e·X / axis·X`, scaled and
+    /// shifted.
+    pub basis: (DVec3, DVec3),
+    /// Texels along `x` and `y`.
+    pub map: ShadowMapSize,
+    /// Rungs of the texel-size ladder per doubling (at least 1).
+    pub steps_per_octave: u32,
+    /// Extra room on each side, as a fraction of the points' extent.
+    pub margin: f64,
+}
+
 /// The homography (rows: x, y, unit axis) whose map holds every point of
-/// `xs` (light coordinates) on a snapped texel grid; `None` when a point is
-/// not in front of the light along `axis`.
-fn snapped_homography(
+/// `xs` (light coordinates of `frame`) on the snapped texel grid of `grid`:
+/// texel size on the ladder, origin on a whole texel, one texel of slack.
+/// `None` when a point is not safely in front of the light along the axis
+/// (relative to the map's own field of view, as for every fit).
+pub(crate) fn snapped_homography(
+    frame: &LightFrame,
+    tolerances: &Tolerances,
+    grid: &SnapGrid,
     xs: &[DVec3],
-    axis: DVec3,
-    (e1, e2): (DVec3, DVec3),
-    problem: &ShadowProblem,
-    options: &FocusedSnappedOptions,
 ) -> Option<DMat3> {
-    let min_cos = problem.tolerances().min_front_cosine;
+    let axis = grid.axis;
+    let (e1, e2) = grid.basis;
+    if xs.is_empty() || !crate::matrix::in_front(frame, tolerances, axis, xs) {
+        return None;
+    }
     let mut lo = DVec2::splat(f64::INFINITY);
     let mut hi = DVec2::splat(f64::NEG_INFINITY);
     for x in xs {
-        let w = axis.dot(*x);
-        if !(w > (min_cos * x.length()).max(f64::MIN_POSITIVE)) {
-            return None;
-        }
-        let uv = DVec2::new(e1.dot(*x), e2.dot(*x)) / w;
+        let uv = DVec2::new(e1.dot(*x), e2.dot(*x)) / axis.dot(*x);
         lo = lo.min(uv);
         hi = hi.max(uv);
     }
-    let map = problem.map_size();
+    let pad = (hi - lo) * grid.margin.max(0.0);
+    let (lo, hi) = (lo - pad, hi + pad);
     // A floor on the extent keeps a degenerate (point or segment) focus
     // from giving a zero texel.
     let floor = 1e-9 * hi.abs().max(lo.abs()).max_element().max(1e-9);
-    let x = snap_interval(lo.x, hi.x, map.width, options.steps_per_octave, floor);
-    let y = snap_interval(lo.y, hi.y, map.height, options.steps_per_octave, floor);
+    let map = grid.map;
+    let x = snap_interval(lo.x, hi.x, map.width, grid.steps_per_octave, floor);
+    let y = snap_interval(lo.y, hi.y, map.height, grid.steps_per_octave, floor);
     // NDC = 2 (u - origin) / (texels · texel) - 1 along each axis.
     let row = |e: DVec3, (origin, texel): (f64, f64), texels: u32| {
         let s = 2.0 / (f64::from(texels) * texel);
         e * s + axis * (-origin * s - 1.0)
     };
-    Some(DMat3::from_cols(row(e1, x, map.width), row(e2, y, map.height), axis).transpose())
+    let h = DMat3::from_cols(row(e1, x, map.width), row(e2, y, map.height), axis).transpose();
+    h.is_finite().then_some(h)
 }
 
 /// `(origin, texel)` of a grid of `texels` texels holding `[lo, hi]`: the

@@ -18,6 +18,7 @@ use crate::matrix::{LightMatrix, Method};
 use crate::problem::ShadowProblem;
 
 pub use focused_snapped::FocusedSnappedOptions;
+pub(crate) use focused_snapped::{snapped_homography, SnapGrid};
 pub use lispsm::{LiSpsmOptions, NOpt};
 pub use plane_optimal::PlaneOptimalOptions;
 pub use psm::{psm_light_case, PsmLightCase, PsmOptions};

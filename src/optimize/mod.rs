@@ -15,6 +15,7 @@ mod objective;
 mod samples;
 mod schedule;
 mod search;
+mod stable;
 
 use glam::{DMat3, DVec2, DVec3};
 
@@ -29,6 +30,7 @@ pub use objective::{
 };
 pub use samples::{PixelRect, Readback, ReadbackDepth, ReadbackLayout, RowOrder, SampleCounts, SampleOptions, Samples};
 pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
+pub use stable::{AcceptMeasure, TexelSnap};
 
 /// The paper's rotation angles, in degrees (one negative for exploration).
 pub const PAPER_ANGLES_DEGREES: [f64; 9] = [-10.0, 3.0, 5.0, 9.0, 16.0, 23.0, 30.0, 40.0, 50.0];
@@ -71,9 +73,20 @@ pub struct OptimizeOptions {
     pub iterations: usize,
     /// Rotation angles tried per iteration, degrees. Default [`PAPER_ANGLES_DEGREES`].
     pub angles_degrees: Vec<f64>,
-    /// Accept the new matrix only if its median badness is below this times
-    /// the previous matrix's (re-fitted to the current samples). Default 0.8.
+    /// Hysteresis: accept the new matrix only if its
+    /// [`accept_measure`](Self::accept_measure) is below this times the
+    /// previous matrix's (re-fitted to the current samples). Default 0.8.
     pub accept_ratio: f64,
+    /// What the hysteresis compares. Default [`AcceptMeasure::Median`] (the
+    /// paper).
+    pub accept_measure: AcceptMeasure,
+    /// Texel snapping of the affine part: the image-plane directions are kept
+    /// while `j` is, the texel size is on a ladder and the origin on whole
+    /// texels ([`TexelSnap`]). The paper: `None`.
+    pub snap: Option<TexelSnap>,
+    /// Bounded rotation: an accepted axis turns at most this many degrees
+    /// from the previous one per update. The paper: `None` (unbounded).
+    pub max_turn_degrees: Option<f64>,
     /// Grow the rectangle by this fraction of the map on each side (the
     /// samples are sub-sampled). Default 0.01.
     pub margin_fraction: f64,
@@ -91,10 +104,29 @@ impl Default for OptimizeOptions {
             iterations: 3,
             angles_degrees: PAPER_ANGLES_DEGREES.to_vec(),
             accept_ratio: 0.8,
+            accept_measure: AcceptMeasure::Median,
+            snap: None,
+            max_turn_degrees: None,
             margin_fraction: 0.01,
             shear: false,
             strategy: SearchStrategy::Paper,
             gradient: GradientSource::Refit,
+        }
+    }
+}
+
+impl OptimizeOptions {
+    /// The paper's behaviour (Chong & Gortler 2006): the median rule with
+    /// ratio 0.8, no texel snapping, no bound on the rotation of `j`,
+    /// whatever the defaults become.
+    #[must_use]
+    pub fn paper() -> Self {
+        Self {
+            accept_ratio: 0.8,
+            accept_measure: AcceptMeasure::Median,
+            snap: None,
+            max_turn_degrees: None,
+            ..Self::default()
         }
     }
 }
@@ -124,6 +156,12 @@ pub struct OptimizeReport {
     pub relevant_samples: usize,
     /// Set when the focused matrix was returned instead.
     pub fallback: Option<Fallback>,
+    /// The matrix returned is on a snapped texel grid
+    /// ([`OptimizeOptions::snap`]).
+    pub snapped: bool,
+    /// The accepted axis was turned less far than the search went
+    /// ([`OptimizeOptions::max_turn_degrees`]).
+    pub turn_limited: bool,
 }
 
 /// The chosen matrix and the report.
@@ -143,6 +181,43 @@ pub struct Optimized {
 /// As [`Optimizer::optimize`].
 pub fn optimize_light_matrix(samples: &Samples, prev: Option<&LightMatrix>) -> Result<Optimized> {
     Optimizer::new(OptimizeOptions::default()).optimize(samples, prev)
+}
+
+/// Scene-optimizes several lights: light `i` with `optimizers[i]` (its
+/// reusable buffers), `samples[i]` and `prev[i]`. With the `rayon` feature
+/// the lights run in parallel; each light's result is exactly what
+/// [`Optimizer::optimize`] returns for it alone (the lights share nothing).
+/// An engine extracts the samples of all its lights with
+/// [`Samples::from_readback_all`] and calls this once per analysis frame.
+///
+/// # Errors
+/// [`LixelError::UnusableSamples`] when the three slices differ in length;
+/// each light's own error is in its entry.
+pub fn optimize_lights(
+    optimizers: &mut [Optimizer],
+    samples: &[Samples],
+    prev: &[Option<LightMatrix>],
+) -> Result<Vec<Result<Optimized>>> {
+    if optimizers.len() != samples.len() || prev.len() != samples.len() {
+        return Err(LixelError::UnusableSamples { reason: "one optimizer and one previous matrix per light" });
+    }
+    #[cfg(feature = "rayon")]
+    {
+        use rayon::prelude::*;
+        Ok(optimizers
+            .par_iter_mut()
+            .zip(samples.par_iter().zip(prev.par_iter()))
+            .map(|(optimizer, (samples, prev))| optimizer.optimize(samples, prev.as_ref()))
+            .collect())
+    }
+    #[cfg(not(feature = "rayon"))]
+    {
+        Ok(optimizers
+            .iter_mut()
+            .zip(samples.iter().zip(prev))
+            .map(|(optimizer, (samples, prev))| optimizer.optimize(samples, prev.as_ref()))
+            .collect())
+    }
 }
 
 /// The optimizer with reusable buffers: repeated calls allocate nothing new
@@ -187,8 +262,13 @@ impl Optimizer {
     ///    is the minimum-area rectangle around the relevant samples, and a
     ///    candidate that puts any relevant sample behind the light is skipped.
     ///    The result's objective is never worse than the start's.
-    /// 4. Accepts the result over the previous matrix only if its median
-    ///    badness is below `accept_ratio` times the previous one's.
+    /// 4. Accepts the result over the previous matrix only if its
+    ///    [`AcceptMeasure`] (the paper: median badness) is below
+    ///    `accept_ratio` times the previous one's; an accepted axis turns at
+    ///    most [`OptimizeOptions::max_turn_degrees`] from the previous one.
+    /// 5. With [`OptimizeOptions::snap`], the matrix shown is put on a
+    ///    snapped texel grid (the previous matrix's image-plane directions
+    ///    while its axis is kept), where that still holds every sample.
     ///
     /// # Errors
     /// Only what computing the focused matrix reports (a point light inside
@@ -239,25 +319,56 @@ impl Optimizer {
         };
         report.objective_new = best.objective;
         report.median_new = self.median(samples, &best.homography);
-        let new_matrix = self.finish(samples, best.homography);
-        let (matrix, other) = match start_prev {
-            None => {
-                report.accepted = true;
-                (new_matrix, None)
-            }
+        let accepted = match start_prev {
+            None => true,
             Some(prev_candidate) => {
                 let median_prev = self.median(samples, &prev_candidate.homography);
                 report.objective_prev = Some(prev_candidate.objective);
                 report.median_prev = Some(median_prev);
-                report.accepted = report.median_new < self.options.accept_ratio * median_prev;
-                let prev_matrix = self.finish(samples, prev_candidate.homography);
-                if report.accepted {
-                    (new_matrix, Some(prev_matrix))
-                } else {
-                    (prev_matrix, Some(new_matrix))
-                }
+                let (new, old) = match self.options.accept_measure {
+                    AcceptMeasure::Median => (report.median_new, median_prev),
+                    AcceptMeasure::Objective => (best.objective, prev_candidate.objective),
+                };
+                new < self.options.accept_ratio * old
             }
         };
+        report.accepted = accepted;
+        let mut new_h = best.homography;
+        if let (true, Some(limit), Some(prev_candidate)) = (accepted, self.options.max_turn_degrees, start_prev) {
+            let axis = stable::turn_towards(prev_candidate.axis, best.axis, limit.to_radians());
+            if axis.angle_between(best.axis) > 1e-12 {
+                if let Some(turned) = self.candidate(samples, axis) {
+                    new_h = turned.homography;
+                    report.turn_limited = true;
+                }
+            }
+        }
+        let (chosen_h, other_h) = match start_prev {
+            None => (new_h, None),
+            Some(p) if accepted => (new_h, Some(p.homography)),
+            Some(p) => (p.homography, Some(new_h)),
+        };
+        let mut matrix = self.finish(samples, chosen_h);
+        if let Some(snap) = self.options.snap {
+            // The grid's directions: the previous matrix's while its axis is
+            // kept, else the new fit's.
+            let reference = match prev.filter(|_| !accepted) {
+                Some(m) => {
+                    let row = |r: usize| frame.axis_from_world_row(m.clip_from_world.row(r));
+                    DMat3::from_cols(row(0), row(1), row(3)).transpose()
+                }
+                None => chosen_h,
+            };
+            let margin = self.options.margin_fraction.max(0.0);
+            let snapped = stable::snap(samples, &reference, chosen_h.row(2), &self.extreme, snap, margin)
+                .map(|h| self.finish(samples, h))
+                .filter(|m| self.holds_samples(samples, m));
+            if let Some(snapped) = snapped {
+                matrix = snapped;
+                report.snapped = true;
+            }
+        }
+        let other = other_h.map(|h| self.finish(samples, h));
         // The answer must hold every relevant sample (not only the extreme
         // rays it was fitted to): otherwise the other matrix, else the
         // focused one.
@@ -266,6 +377,7 @@ impl Optimizer {
         }
         if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
             report.accepted = !report.accepted;
+            report.snapped = false;
             return Ok(Optimized { matrix: other, report });
         }
         report.fallback = Some(Fallback::NoUsableSamples);

@@ -91,6 +91,8 @@ pub struct ReadbackLayout {
 /// A readback brought to lixel's convention: top-down rows, lixel depth
 /// (non-finite where nothing was drawn), screen placement.
 struct Grid {
+    width: usize,
+    height: usize,
     depth: Vec<f64>,
     bits: Vec<u32>,
     normals: Option<Vec<[f32; 3]>>,
@@ -160,6 +162,8 @@ impl Grid {
         };
         let rows = |y: usize| source_row(y) * w..source_row(y) * w + w;
         Ok(Self {
+            width: w,
+            height: h,
             depth: (0..h).flat_map(|y| readback.depth[rows(y)].iter().map(|&v| to_lixel(v))).collect(),
             bits: (0..h).flat_map(|y| readback.shadow_bits[rows(y)].iter().copied()).collect(),
             normals: readback.normals.map(|n| (0..h).flat_map(|y| n[rows(y)].iter().copied()).collect()),
@@ -381,164 +385,312 @@ impl Samples {
         light_index: u32,
         options: &SampleOptions,
     ) -> Result<Self> {
-        let (w, h) = (readback.width as usize, readback.height as usize);
-        let n = w * h;
-        if readback.depth.len() != n
-            || readback.shadow_bits.len() != n
-            || readback.normals.is_some_and(|normals| normals.len() != n)
-        {
-            return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
-        }
+        check_readback(readback)?;
         if light_index as usize >= crate::MAX_LIGHTS {
             return Err(LixelError::UnusableSamples { reason: "light index must be below 32" });
         }
-        let camera = *problem.camera();
-        let grid = Grid::new(&camera, readback)?;
-        let mut samples = Self::empty(problem);
-        if n == 0 {
-            return Ok(samples);
+        let grid = Grid::new(problem.camera(), readback)?;
+        let mut all = vec![Self::empty(problem)];
+        extract(&mut all, &[light_index], &grid, options);
+        Ok(all.pop().expect("one light"))
+    }
+
+    /// The samples of every light at once: `problems[i]` is light `i` (bit
+    /// `i` of [`Readback::shadow_bits`]). One pass over the readback serves
+    /// all lights (their bits share a `u32`, and a pixel's world position and
+    /// surface derivatives are computed once); each light's samples equal
+    /// [`Self::from_readback`]'s for its bit. With the `rayon` feature the
+    /// lights' bodies and focused matrices are computed in parallel.
+    ///
+    /// # Errors
+    /// [`LixelError::UnusableSamples`] when the buffer sizes do not match
+    /// `width x height` or there are more than 32 problems.
+    pub fn from_readback_all(
+        problems: &[ShadowProblem],
+        readback: &Readback<'_>,
+        options: &SampleOptions,
+    ) -> Result<Vec<Self>> {
+        check_readback(readback)?;
+        if problems.len() > crate::MAX_LIGHTS {
+            return Err(LixelError::UnusableSamples { reason: "at most 32 lights share a readback" });
         }
-        let light = *problem.light();
-        let world_from_screen = camera.screen_from_world().inverse();
-        let step = grid.step;
-        let bit = 1u32 << light_index;
-        // Lixel depth, non-finite where nothing was drawn (see `Grid`).
-        let depth_at = |x: usize, y: usize| -> Option<f64> {
-            let d = grid.depth[y * w + x];
-            d.is_finite().then_some(d)
+        let Some(first) = problems.first() else {
+            return Ok(Vec::new());
         };
-        // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
-        let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
-            let v = world_from_screen * DVec4::new(sx, sy, d, 1.0);
-            if v.w < 0.0 {
-                -v
-            } else {
-                v
-            }
+        if problems.iter().any(|p| p.camera() != first.camera()) {
+            return Err(LixelError::UnusableSamples { reason: "lights sharing a readback must share its camera" });
+        }
+        let grid = Grid::new(first.camera(), readback)?;
+        #[cfg(feature = "rayon")]
+        let mut all: Vec<Self> = {
+            use rayon::prelude::*;
+            problems.par_iter().map(Self::empty).collect()
         };
-        // Per pixel: 1 shadowed, 2 lit, 0 no geometry; then the OR of that
-        // over the 3x3 neighbourhood (separable), so 3 marks a shadow boundary.
-        let class: Vec<u8> = grid
-            .depth
-            .iter()
-            .zip(&grid.bits)
-            .map(|(&d, &bits)| match (d.is_finite(), bits & bit != 0) {
-                (false, _) => 0,
-                (true, true) => 1,
-                (true, false) => 2,
+        #[cfg(not(feature = "rayon"))]
+        let mut all: Vec<Self> = problems.iter().map(Self::empty).collect();
+        let bits: Vec<u32> = (0..problems.len() as u32).collect();
+        extract(&mut all, &bits, &grid, options);
+        Ok(all)
+    }
+}
+
+/// The buffers match the readback's size.
+fn check_readback(readback: &Readback<'_>) -> Result<()> {
+    let n = readback.width as usize * readback.height as usize;
+    if readback.depth.len() != n
+        || readback.shadow_bits.len() != n
+        || readback.normals.is_some_and(|normals| normals.len() != n)
+    {
+        return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
+    }
+    Ok(())
+}
+
+/// OR of `src` over each pixel's 3x3 neighbourhood (clamped at the edges),
+/// separably.
+fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(src: &[T], w: usize, h: usize) -> Vec<T> {
+    let mut tmp = vec![T::default(); src.len()];
+    for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        for x in 0..w {
+            t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
+        }
+    }
+    let mut dst = vec![T::default(); src.len()];
+    for y in 0..h {
+        let (above, here, below) =
+            (&tmp[y.saturating_sub(1) * w..][..w], &tmp[y * w..][..w], &tmp[(y + 1).min(h - 1) * w..][..w]);
+        for (x, cell) in dst[y * w..][..w].iter_mut().enumerate() {
+            *cell = above[x] | here[x] | below[x];
+        }
+    }
+    dst
+}
+
+/// Per pixel and light slot `k` (the `k`-th light extracted): shadowed, and
+/// lit, over covered pixels; and the OR of both over the 3x3 neighbourhood,
+/// so a slot both shadowed and lit nearby marks a shadow boundary. One light
+/// packs into a byte (bit 0 shadowed, bit 1 lit); up to 32 into a `u64`
+/// (shadowed slots in the low half, lit in the high half), so one pass
+/// serves every light.
+enum Classes {
+    One { class: Vec<u8>, near: Vec<u8> },
+    Many { class: Vec<u64>, near: Vec<u64> },
+}
+
+impl Classes {
+    fn new(grid: &Grid, bits: &[u32]) -> Self {
+        let (w, h) = (grid.width, grid.height);
+        let valid = |d: f64| d.is_finite();
+        let pixels = grid.depth.iter().zip(&grid.bits);
+        if let [bit] = *bits {
+            let class: Vec<u8> = pixels
+                .map(|(&d, &b)| match (valid(d), b >> bit & 1 != 0) {
+                    (false, _) => 0,
+                    (true, true) => 1,
+                    (true, false) => 2,
+                })
+                .collect();
+            let near = or_3x3(&class, w, h);
+            return Self::One { class, near };
+        }
+        let class: Vec<u64> = pixels
+            .map(|(&d, &b)| {
+                if !valid(d) {
+                    return 0;
+                }
+                bits.iter()
+                    .enumerate()
+                    .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
             })
             .collect();
-        let mut across = vec![0u8; n];
-        for (src, dst) in class.chunks_exact(w).zip(across.chunks_exact_mut(w)) {
-            for x in 0..w {
-                dst[x] = src[x.saturating_sub(1)] | src[x] | src[(x + 1).min(w - 1)];
-            }
+        let near = or_3x3(&class, w, h);
+        Self::Many { class, near }
+    }
+
+    /// Slots shadowed at pixel `i`, and slots with a shadow boundary there.
+    fn at(&self, i: usize) -> (u32, u32) {
+        match self {
+            Self::One { class, near } => (u32::from(class[i] & 1), u32::from(near[i] & (near[i] >> 1) & 1)),
+            Self::Many { class, near } => (class[i] as u32, near[i] as u32 & (near[i] >> 32) as u32),
         }
-        let mut near = vec![0u8; n];
-        for y in 0..h {
-            let (above, here, below) = (
-                &across[y.saturating_sub(1) * w..][..w],
-                &across[y * w..][..w],
-                &across[(y + 1).min(h - 1) * w..][..w],
-            );
-            for (x, cell) in near[y * w..][..w].iter_mut().enumerate() {
-                *cell = above[x] | here[x] | below[x];
-            }
+    }
+}
+
+/// Fills `all[k]` (already [`Samples::empty`]) from the readback for light
+/// bit `bits[k]` (at most 32 lights), in one pass over the pixels.
+fn extract(all: &mut [Samples], bits: &[u32], grid: &Grid, options: &SampleOptions) {
+    let (w, h) = (grid.width, grid.height);
+    let n = w * h;
+    if n == 0 || all.is_empty() {
+        return;
+    }
+    // Every light's problem shares the camera (the readback is its view).
+    let camera = *all[0].problem.camera();
+    let world_from_screen = camera.screen_from_world().inverse();
+    let step = grid.step;
+    // Lixel depth, non-finite where nothing was drawn (see `Grid`).
+    let depth_at = |x: usize, y: usize| -> Option<f64> {
+        let d = grid.depth[y * w + x];
+        d.is_finite().then_some(d)
+    };
+    // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
+    let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
+        let v = world_from_screen * DVec4::new(sx, sy, d, 1.0);
+        if v.w < 0.0 {
+            -v
+        } else {
+            v
         }
-        for y in 0..h {
-            for x in 0..w {
-                let class_here = class[y * w + x];
-                if class_here == 0 {
-                    continue;
-                }
+    };
+    let classes = Classes::new(grid, bits);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if !grid.depth[i].is_finite() {
+                continue;
+            }
+            let (shadowed_bits, mixed_bits) = classes.at(i);
+            for (bit, samples) in all.iter_mut().enumerate() {
                 samples.counts.covered += 1;
-                let shadowed = class_here == 1;
-                let mixed = near[y * w + x] == 3;
-                if shadowed {
-                    samples.counts.shadowed += 1;
+                samples.counts.shadowed += (shadowed_bits >> bit & 1) as usize;
+            }
+            let active = shadowed_bits | mixed_bits;
+            if active == 0 {
+                continue;
+            }
+            let d = grid.depth[i];
+            let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let here = unproject(sx, sy, d);
+            if !(here.w > 0.0) || !here.is_finite() {
+                for (bit, samples) in all.iter_mut().enumerate() {
+                    samples.counts.rejected_invalid += (active >> bit & 1) as usize;
                 }
-                if !shadowed && !mixed {
+                continue;
+            }
+            let world = here.truncate() / here.w;
+            // Light-independent surface derivatives, computed on first use.
+            let mut surface: Option<Option<Surface>> = None;
+            for (bit, samples) in all.iter_mut().enumerate() {
+                if active >> bit & 1 == 0 {
                     continue;
                 }
-                let d = grid.depth[y * w + x];
-                let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
-                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-                let here = unproject(sx, sy, d);
-                if !(here.w > 0.0) || !here.is_finite() {
-                    samples.counts.rejected_invalid += 1;
-                    continue;
-                }
-                let world = here.truncate() / here.w;
-                let x_light = samples.frame.homogeneous4(here);
+                let frame = samples.frame;
+                let x_light = frame.homogeneous4(here);
                 samples.relevant.push(x_light);
                 samples.relevant_world.push(world);
                 samples.depth_points.push(world);
-                if !mixed {
+                if mixed_bits >> bit & 1 == 0 {
                     continue;
                 }
                 samples.counts.boundary_candidates += 1;
-                // Depth slope along each screen axis (full-resolution units).
-                let slope = |dx: isize, dy: isize| -> Option<f64> {
-                    let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
-                    let (x1, y1) = (x + dx as usize, y + dy as usize);
-                    if x1 >= w || y1 >= h {
-                        return None;
-                    }
-                    let (d0, d1) = (depth_at(x0, y0)?, depth_at(x1, y1)?);
-                    let first = 0.5 * (d1 - d0);
-                    let second = d1 - 2.0 * d + d0;
-                    (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
-                        .then_some(first / if dx != 0 { step.x } else { step.y })
-                };
-                let normal_given = grid.normals.as_ref().map(|normals| {
-                    let [nx, ny, nz] = normals[y * w + x];
-                    DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
+                let found = *surface.get_or_insert_with(|| {
+                    surface_at(
+                        grid,
+                        &world_from_screen,
+                        &camera,
+                        options,
+                        (x, y),
+                        (sx, sy, d),
+                        here,
+                        world,
+                        step,
+                        &depth_at,
+                    )
                 });
-                let frame = samples.frame;
-                let (sample, normal) = match normal_given.and_then(DVec3::try_normalize) {
-                    Some(normal) => {
-                        // Derivatives of the surface point along the tangent plane.
-                        let Some((tx, ty)) = plane_derivatives(&world_from_screen, sx, sy, world, normal) else {
-                            samples.counts.rejected_discontinuity += 1;
-                            continue;
-                        };
+                let Some(found) = found else {
+                    samples.counts.rejected_discontinuity += 1;
+                    continue;
+                };
+                let sample = match found {
+                    Surface::Given { tx, ty, .. } => {
                         let along = |t: DVec3| frame.homogeneous4(t.extend(0.0));
-                        let sample =
-                            BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) };
-                        (sample, normal)
+                        BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
                     }
-                    None => {
-                        let (Some(zx), Some(zy)) = (slope(1, 0), slope(0, 1)) else {
-                            samples.counts.rejected_discontinuity += 1;
-                            continue;
-                        };
-                        let dx4 = world_from_screen * DVec4::new(1.0, 0.0, zx, 0.0);
-                        let dy4 = world_from_screen * DVec4::new(0.0, 1.0, zy, 0.0);
-                        let (dx4, dy4) = if here.w < 0.0 { (-dx4, -dy4) } else { (dx4, dy4) };
-                        // World tangents (derivative of the dehomogenised point).
-                        let tx = (dx4.truncate() - world * dx4.w) / here.w;
-                        let ty = (dy4.truncate() - world * dy4.w) / here.w;
-                        let mut normal = tx.cross(ty).normalize_or_zero();
-                        if normal.dot(camera.towards_viewer(world)) < 0.0 {
-                            normal = -normal;
-                        }
-                        // Homogeneous point and its homogeneous derivatives: one scale.
-                        let sample = BoundarySample {
-                            light: x_light,
-                            d_dx: frame.homogeneous4(dx4),
-                            d_dy: frame.homogeneous4(dy4),
-                        };
-                        (sample, normal)
+                    Surface::Depth { dx4, dy4, .. } => {
+                        BoundarySample { light: x_light, d_dx: frame.homogeneous4(dx4), d_dy: frame.homogeneous4(dy4) }
                     }
                 };
-                if !faces_light(&light, world, normal, options.min_light_cosine) {
+                if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
                     samples.counts.rejected_back_facing += 1;
                     continue;
                 }
                 samples.boundary.push(sample);
             }
         }
-        Ok(samples)
+    }
+}
+
+/// A boundary pixel's surface: world tangents from a read-back normal, or
+/// homogeneous derivatives from depth differences.
+#[derive(Clone, Copy)]
+enum Surface {
+    Given { tx: DVec3, ty: DVec3, normal: DVec3 },
+    Depth { dx4: DVec4, dy4: DVec4, normal: DVec3 },
+}
+
+impl Surface {
+    fn normal(self) -> DVec3 {
+        match self {
+            Self::Given { normal, .. } | Self::Depth { normal, .. } => normal,
+        }
+    }
+}
+
+/// The surface at boundary pixel `(x, y)`; `None` at a depth discontinuity
+/// or where the derivatives are not finite.
+#[allow(clippy::too_many_arguments)]
+fn surface_at(
+    grid: &Grid,
+    world_from_screen: &glam::DMat4,
+    camera: &crate::Camera,
+    options: &SampleOptions,
+    (x, y): (usize, usize),
+    (sx, sy, d): (f64, f64, f64),
+    here: DVec4,
+    world: DVec3,
+    step: glam::DVec2,
+    depth_at: &impl Fn(usize, usize) -> Option<f64>,
+) -> Option<Surface> {
+    let (w, h) = (grid.width, grid.height);
+    // Depth slope along each screen axis (full-resolution units).
+    let slope = |dx: isize, dy: isize| -> Option<f64> {
+        let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
+        let (x1, y1) = (x + dx as usize, y + dy as usize);
+        if x1 >= w || y1 >= h {
+            return None;
+        }
+        let (d0, d1) = (depth_at(x0, y0)?, depth_at(x1, y1)?);
+        let first = 0.5 * (d1 - d0);
+        let second = d1 - 2.0 * d + d0;
+        (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
+            .then_some(first / if dx != 0 { step.x } else { step.y })
+    };
+    let normal_given = grid.normals.as_ref().map(|normals| {
+        let [nx, ny, nz] = normals[y * w + x];
+        DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
+    });
+    match normal_given.and_then(DVec3::try_normalize) {
+        Some(normal) => {
+            // Derivatives of the surface point along the tangent plane.
+            let (tx, ty) = plane_derivatives(world_from_screen, sx, sy, world, normal)?;
+            Some(Surface::Given { tx, ty, normal })
+        }
+        None => {
+            let (zx, zy) = (slope(1, 0)?, slope(0, 1)?);
+            let dx4 = *world_from_screen * DVec4::new(1.0, 0.0, zx, 0.0);
+            let dy4 = *world_from_screen * DVec4::new(0.0, 1.0, zy, 0.0);
+            let (dx4, dy4) = if here.w < 0.0 { (-dx4, -dy4) } else { (dx4, dy4) };
+            // World tangents (derivative of the dehomogenised point).
+            let tx = (dx4.truncate() - world * dx4.w) / here.w;
+            let ty = (dy4.truncate() - world * dy4.w) / here.w;
+            let mut normal = tx.cross(ty).normalize_or_zero();
+            if normal.dot(camera.towards_viewer(world)) < 0.0 {
+                normal = -normal;
+            }
+            // Homogeneous point and its homogeneous derivatives: one scale.
+            Some(Surface::Depth { dx4, dy4, normal })
+        }
     }
 }
 

@@ -215,7 +215,8 @@ impl ShadowLoop {
             }
         }
         let readback = readback.map(|r| ReadbackInfo { frame: r.frame, latency: r.latency, focused: r.tag });
-        let optimize_time = optimizing.elapsed();
+        // Zero for a policy without analysis: nothing was taken or optimized.
+        let optimize_time = if analyses { optimizing.elapsed() } else { Duration::ZERO };
 
         let solving = Instant::now();
         let matrices = match &self.policy {
@@ -252,15 +253,22 @@ impl ShadowLoop {
             lights: (!analysis_lights.is_empty()).then_some(&analysis_lights[..]),
             tag: plan.focused,
         });
-        let render = renderer.render(&Frame {
-            camera: view.camera,
-            lights: &matrices,
-            masks: false,
-            analysis,
-            lookup: self.lookup,
-        })?;
-        self.frame += 1;
+        let render = self.render(renderer, view, &matrices, analysis)?;
         Ok(LoopFrame { matrices, render, readback, optimized, failed, fallbacks, optimize_time, solve_time })
+    }
+
+    /// Renders the loop's frame (no masks, the loop's lookup) and counts it.
+    fn render(
+        &mut self,
+        renderer: &mut Renderer,
+        view: &LoopView<'_>,
+        lights: &[LightMatrix],
+        analysis: Option<AnalysisRequest<'_>>,
+    ) -> Result<FrameReport, LoopError> {
+        let report =
+            renderer.render(&Frame { camera: view.camera, lights, masks: false, analysis, lookup: self.lookup })?;
+        self.frame += 1;
+        Ok(report)
     }
 
     /// The loop at a fixed view, as in a walkthrough that pauses: starting
@@ -289,14 +297,7 @@ impl ShadowLoop {
         for frame in 1..=max_frames {
             let matrices = current(&self.scheduler);
             let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
-            let report = renderer.render(&Frame {
-                camera: view.camera,
-                lights: &matrices,
-                masks: false,
-                analysis,
-                lookup: self.lookup,
-            })?;
-            self.frame += 1;
+            let report = self.render(renderer, view, &matrices, analysis)?;
             renderer.wait_for(&report.submission)?;
             let readback = loop {
                 if let Some(r) = renderer.try_take_analysis() {

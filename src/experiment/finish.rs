@@ -1,0 +1,176 @@
+//! What a run does after its configurations, shared by `run` and `merge`:
+//! check that something was counted, measure the resolution equivalence and
+//! render the best/median/worst pictures (the only GPU work here), then hand
+//! plain data to the writers in `report`, `images` and `plots`, which never
+//! touch the renderer.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::images::{error_overlay, Picture};
+use super::report::{self, Equivalence, Summary};
+use super::rows::ConfigRow;
+use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodKind, Runner};
+
+/// How complete the rows of a report are.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(super) struct Completeness {
+    /// Configurations without rows (a merge with `--allow-missing`).
+    pub missing: Vec<usize>,
+    /// The shard directories merged, when this is a merge.
+    pub merged_from: Vec<PathBuf>,
+    /// The adapter and backend the run (or merge) rendered on.
+    pub adapter: String,
+}
+
+/// Fails when no configuration counted a pixel (the camera sees nothing
+/// lit, e.g. aimed at the sky or at a scene far from the origin); adds a
+/// warning naming the configurations that counted 0.
+pub(super) fn check_counted(rows: &[ConfigRow], warnings: &mut Vec<String>) -> Result<(), ExperimentError> {
+    let mut configs: Vec<(usize, u64)> = Vec::new();
+    for r in rows {
+        let counted = r.counted.unwrap_or(0);
+        match configs.last_mut() {
+            Some((c, n)) if *c == r.config => *n = (*n).max(counted),
+            _ => configs.push((r.config, counted)),
+        }
+    }
+    let zero: Vec<usize> = configs.iter().filter(|&&(_, n)| n == 0).map(|&(c, _)| c).collect();
+    if !configs.is_empty() && zero.len() == configs.len() {
+        return Err(ExperimentError::NothingCounted { configs: configs.len() });
+    }
+    if !zero.is_empty() {
+        let shown: Vec<String> = zero.iter().take(20).map(ToString::to_string).collect();
+        warnings.push(format!(
+            "{} of {} configurations counted 0 pixels (no visible receiver faces the light): {}{}",
+            zero.len(),
+            configs.len(),
+            shown.join(", "),
+            if zero.len() > 20 { ", ..." } else { "" }
+        ));
+    }
+    Ok(())
+}
+
+/// Equivalence, pictures, summary and every report file in `dir`. A shard
+/// writes only its rows and a note (the merge does the rest).
+pub(super) fn finish(
+    runner: &mut Runner<'_>,
+    config: &ExperimentConfig,
+    dir: &Path,
+    rows: &[ConfigRow],
+    completeness: &Completeness,
+    warnings: Vec<String>,
+    started: Instant,
+) -> Result<Summary, ExperimentError> {
+    if config.shard.is_some() {
+        let mut summary = report::summarize(config, rows, (Vec::new(), Vec::new()), started.elapsed(), warnings);
+        summary.adapter.clone_from(&completeness.adapter);
+        report::write_shard(dir, config, rows, &summary)?;
+        return Ok(summary);
+    }
+    let equivalence = equivalence(runner, config)?;
+    let pictures = extremes(runner, config, rows)?;
+    let mut summary = report::summarize(config, rows, equivalence, started.elapsed(), warnings);
+    summary.missing.clone_from(&completeness.missing);
+    summary.adapter.clone_from(&completeness.adapter);
+    report::write_all(dir, config, rows, &summary, &pictures, completeness)?;
+    Ok(summary)
+}
+
+/// Configurations the resolution equivalence uses.
+pub(super) fn equivalence_count(config: &ExperimentConfig) -> usize {
+    config.equivalence_configs.min(config.configs)
+}
+
+/// The resolution-equivalence figures (empty when disabled).
+fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equivalence, ExperimentError> {
+    let count = equivalence_count(config);
+    if count == 0 || !config.methods.contains(&MethodKind::Optimized) {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let mut ladder = Vec::new();
+    for &size in &config.equivalence_ladder {
+        ladder.push((size, runner.mean_at_resolution(MethodKind::Focused, size, count)?));
+    }
+    let mut result = Vec::new();
+    for size in [400u32, 1024] {
+        let mean = runner.mean_at_resolution(MethodKind::Optimized, size, count)?;
+        result.push((size, mean, report::crossing(&ladder, mean)));
+    }
+    Ok((result, ladder))
+}
+
+/// For every method: its best, median and worst configuration re-run, with
+/// the errors overlaid.
+fn extremes(
+    runner: &mut Runner<'_>,
+    config: &ExperimentConfig,
+    rows: &[ConfigRow],
+) -> Result<Vec<Picture>, ExperimentError> {
+    let mut pictures = Vec::new();
+    for &m in &config.methods {
+        let mut by_error: Vec<(u64, usize)> =
+            rows.iter().filter(|r| r.method == m).filter_map(|r| Some((r.misclassified?, r.config))).collect();
+        if by_error.is_empty() {
+            continue;
+        }
+        by_error.sort_unstable();
+        let picks = [
+            ("best", by_error[0].1),
+            ("median", by_error[by_error.len() / 2].1),
+            ("worst", by_error[by_error.len() - 1].1),
+        ];
+        for (which, index) in picks {
+            let light = light_for(config, runner.scene(), index);
+            let (ray, focused) = runner.truths(light)?;
+            let Some(truth) = ray.or(focused) else { continue };
+            let problem = runner.problem(light, config.map)?;
+            let nearest = nearest_view_depth(runner.camera(), &truth);
+            let Ok((matrix, _, _)) = runner.matrix(m, &problem, nearest) else { continue };
+            let masks = runner.masks(&matrix)?;
+            let misclassified = Counts::compare(&masks, &truth).misclassified();
+            pictures.push(Picture {
+                method: m,
+                which,
+                config: index,
+                misclassified,
+                image: error_overlay(&masks, &truth),
+            });
+        }
+    }
+    Ok(pictures)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(config: usize, method: MethodKind, counted: u64) -> ConfigRow {
+        ConfigRow {
+            config,
+            method,
+            light: [0.0; 3],
+            counted: Some(counted),
+            misclassified: Some(0),
+            false_shadow: Some(0),
+            false_lit: Some(0),
+            frames: 1,
+            truth: None,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn zero_pixel_configurations_warn_and_an_all_zero_run_fails() {
+        let mut warnings = Vec::new();
+        let some = [row(0, MethodKind::Normal, 0), row(1, MethodKind::Normal, 50), row(2, MethodKind::Normal, 0)];
+        check_counted(&some, &mut warnings).unwrap();
+        assert_eq!(warnings.len(), 1);
+        assert!(warnings[0].starts_with("2 of 3 configurations counted 0 pixels") && warnings[0].ends_with("0, 2"));
+        let none = [row(0, MethodKind::Normal, 0), row(0, MethodKind::Focused, 0), row(1, MethodKind::Normal, 0)];
+        let e = check_counted(&none, &mut Vec::new()).unwrap_err();
+        assert!(matches!(e, ExperimentError::NothingCounted { configs: 2 }), "{e}");
+        assert!(e.to_string().contains("--eye x,y,z and --target x,y,z"));
+    }
+}

@@ -1,0 +1,89 @@
+//! All-lights sample extraction and parallel optimization give exactly the
+//! per-light, sequential answers (issue 15).
+
+use glam::DVec3;
+use lixel::optimize::{optimize_lights, OptimizeOptions, Optimizer, SampleOptions};
+use lixel::{Light, LightMatrix, LixelError, Samples};
+
+mod common;
+
+fn lights() -> Vec<Light> {
+    vec![
+        Light::directional(DVec3::new(0.5, -1.0, -0.2)),
+        Light::directional(DVec3::new(-0.7, -0.6, 0.1)),
+        Light::point(DVec3::new(2.0, 6.0, -3.0)),
+        Light::spot(DVec3::new(-1.0, 5.0, -2.0), DVec3::new(0.1, -1.0, -0.4), 40f64.to_radians()),
+        Light::directional(DVec3::new(0.05, -1.0, 0.9)),
+    ]
+}
+
+#[test]
+fn all_lights_extraction_equals_one_light_at_a_time() {
+    let lights = lights();
+    let (problems, readback) = common::setup(&lights);
+    for normals in [false, true] {
+        let readback = readback.as_readback(normals);
+        let all = Samples::from_readback_all(&problems, &readback, &SampleOptions::default()).unwrap();
+        assert_eq!(all.len(), problems.len());
+        let mut boundaries = 0;
+        for (i, (problem, together)) in problems.iter().zip(&all).enumerate() {
+            let alone = Samples::from_readback(problem, &readback, i as u32, &SampleOptions::default()).unwrap();
+            assert_eq!(together.counts(), alone.counts(), "light {i}, normals {normals}");
+            assert_eq!(together.boundary(), alone.boundary(), "light {i}, normals {normals}");
+            assert_eq!(together.relevant_count(), alone.relevant_count(), "light {i}");
+            // The optimizer reads every relevant sample: same samples, same answer.
+            let mut optimizer = Optimizer::new(OptimizeOptions::default());
+            assert_eq!(
+                format!("{:?}", optimizer.optimize(together, None)),
+                format!("{:?}", optimizer.optimize(&alone, None)),
+                "light {i}, normals {normals}"
+            );
+            boundaries += alone.boundary().len();
+        }
+        // The comparison is not vacuous.
+        assert!(boundaries > 0, "no boundary samples at all");
+    }
+}
+
+#[test]
+fn parallel_optimization_equals_sequential() {
+    let lights = lights();
+    let (problems, readback) = common::setup(&lights);
+    let samples =
+        Samples::from_readback_all(&problems, &readback.as_readback(false), &SampleOptions::default()).unwrap();
+    let mut prev: Vec<Option<LightMatrix>> = vec![None; samples.len()];
+    let mut optimizers = vec![Optimizer::new(OptimizeOptions::default()); samples.len()];
+    let mut sequential = vec![Optimizer::new(OptimizeOptions::default()); samples.len()];
+    // Several frames, each starting from the previous frame's matrices.
+    for _ in 0..3 {
+        let together = optimize_lights(&mut optimizers, &samples, &prev).unwrap();
+        let one_by_one: Vec<_> = sequential
+            .iter_mut()
+            .zip(&samples)
+            .zip(&prev)
+            .map(|((optimizer, samples), prev)| optimizer.optimize(samples, prev.as_ref()))
+            .collect();
+        assert_eq!(format!("{together:?}"), format!("{one_by_one:?}"));
+        prev = together.into_iter().map(|r| r.ok().map(|o| o.matrix)).collect();
+        assert!(prev.iter().all(Option::is_some));
+    }
+}
+
+#[test]
+fn mismatched_inputs_are_refused() {
+    let lights = lights();
+    let (problems, readback) = common::setup(&lights);
+    let readback = readback.as_readback(false);
+    let too_many = vec![problems[0].clone(); 33];
+    assert!(matches!(
+        Samples::from_readback_all(&too_many, &readback, &SampleOptions::default()),
+        Err(LixelError::UnusableSamples { .. })
+    ));
+    let samples = Samples::from_readback_all(&problems, &readback, &SampleOptions::default()).unwrap();
+    let mut optimizers = vec![Optimizer::new(OptimizeOptions::default()); 2];
+    assert!(matches!(
+        optimize_lights(&mut optimizers, &samples, &vec![None; samples.len()]),
+        Err(LixelError::UnusableSamples { .. })
+    ));
+    assert!(Samples::from_readback_all(&[], &readback, &SampleOptions::default()).unwrap().is_empty());
+}
