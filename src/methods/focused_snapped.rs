@@ -164,10 +164,15 @@ pub(crate) fn snapped_homography(
 
 /// `(origin, texel)` of a grid of `texels` texels holding `[lo, hi]`: the
 /// texel size is `(hi - lo) / (texels - 1)` rounded up to the ladder
-/// `2^(k / steps)`, the origin the largest multiple of it not above `lo`.
+/// `2^(k / steps)`, the origin the largest multiple of it not above `lo`
+/// (one texel of slack). A one-texel axis has no room for slack: it holds
+/// `[lo, hi]` exactly, unsnapped.
 pub(crate) fn snap_interval(lo: f64, hi: f64, texels: u32, steps: u32, floor: f64) -> (f64, f64) {
+    if texels < 2 {
+        return (lo, (hi - lo).max(floor));
+    }
     let steps = f64::from(steps.max(1));
-    let raw = ((hi - lo) / f64::from(texels.max(2) - 1)).max(floor);
+    let raw = ((hi - lo) / f64::from(texels - 1)).max(floor);
     let mut texel = (raw.log2() * steps).ceil() / steps;
     texel = texel.exp2();
     // exp2 of the rounded exponent may land a hair below `raw`.
@@ -276,5 +281,7 @@ mod tests {
             assert!((rung - rung.round()).abs() < 1e-9 || texel == (hi - lo) / 99.0);
             assert!(((origin / texel) - (origin / texel).round()).abs() < 1e-6);
         }
+        // One texel: no slack, the interval exactly.
+        assert_eq!(snap_interval(-1.0, 3.0, 1, 8, 1e-15), (-1.0, 4.0));
     }
 }

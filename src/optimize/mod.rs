@@ -381,6 +381,7 @@ impl Optimizer {
             return Ok(Optimized { matrix: other, report });
         }
         report.fallback = Some(Fallback::NoUsableSamples);
+        report.snapped = false;
         let mut matrix = focused;
         matrix.method = Method::Optimized;
         matrix.fallback = Some(Fallback::NoUsableSamples);
