@@ -6,8 +6,9 @@
 #[path = "render_common/mod.rs"]
 mod render_common;
 
-use lixel::experiment::stability::{self, CameraPath};
+use lixel::experiment::stability::{self, CameraPath, Variant};
 use lixel::experiment::{ExperimentConfig, MethodKind, Preset, SceneSource};
+use lixel::optimize::OptimizeOptions;
 
 fn tiny(out: &std::path::Path) -> ExperimentConfig {
     // optimized-argmin is left out: on a still camera its Nelder–Mead loop
@@ -32,6 +33,18 @@ fn optimized_argmin_is_still_with_a_still_camera() {
     let dir = std::env::temp_dir().join(format!("lixel-stability-argmin-{}", std::process::id()));
     let config = ExperimentConfig { methods: vec![MethodKind::OptimizedArgmin], ..tiny(&dir) };
     let rows = stability::measure(&config, &CameraPath::still(3), &device, &queue, &mut |_, _| {}).unwrap();
+    assert_eq!(rows[0].mean_flicker(), 0.0);
+}
+
+#[test]
+fn optimized_argmin_holding_its_matrix_is_still() {
+    let Some((device, queue)) = render_common::gpu() else { return };
+    let dir = std::env::temp_dir().join(format!("lixel-stability-argmin-hold-{}", std::process::id()));
+    let config = tiny(&dir);
+    let hold = OptimizeOptions { hold: true, ..OptimizeOptions::default() };
+    let variants = [Variant { method: MethodKind::OptimizedArgmin, options: "hold".into(), optimize: Some(hold) }];
+    let rows = stability::measure_variants(&config, &variants, &CameraPath::still(6), &device, &queue, &mut |_, _| {})
+        .unwrap();
     assert_eq!(rows[0].mean_flicker(), 0.0);
 }
 

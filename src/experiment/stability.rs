@@ -160,6 +160,7 @@ impl Variant {
     pub fn optimizer_option_sets() -> Vec<Self> {
         let paper = OptimizeOptions::paper();
         let snap = Some(TexelSnap::DEFAULT);
+        let turn = Some(5.0);
         vec![
             Self::optimized("paper", paper.clone()),
             Self::optimized("median 1.0", OptimizeOptions { accept_ratio: 1.0, ..paper.clone() }),
@@ -168,10 +169,19 @@ impl Variant {
                 "objective 0.8",
                 OptimizeOptions { accept_measure: AcceptMeasure::Objective, ..paper.clone() },
             ),
+            Self::optimized("hold", OptimizeOptions { hold: true, ..paper.clone() }),
             Self::optimized("snap", OptimizeOptions { snap, ..paper.clone() }),
-            Self::optimized("turn 5", OptimizeOptions { max_turn_degrees: Some(5.0), ..paper.clone() }),
-            Self::optimized("snap + turn 5", OptimizeOptions { snap, max_turn_degrees: Some(5.0), ..paper.clone() }),
-            Self::optimized("snap + median 0.5", OptimizeOptions { snap, accept_ratio: 0.5, ..paper }),
+            Self::optimized("turn 5", OptimizeOptions { max_turn_degrees: turn, ..paper.clone() }),
+            Self::optimized("hold + snap", OptimizeOptions { hold: true, snap, ..paper.clone() }),
+            Self::optimized(
+                "hold + snap + turn 5",
+                OptimizeOptions { hold: true, snap, max_turn_degrees: turn, ..paper.clone() },
+            ),
+            Self {
+                method: MethodKind::OptimizedArgmin,
+                options: "hold".into(),
+                optimize: Some(OptimizeOptions { hold: true, ..paper }),
+            },
         ]
     }
 

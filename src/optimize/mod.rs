@@ -87,6 +87,12 @@ pub struct OptimizeOptions {
     /// Bounded rotation: an accepted axis turns at most this many degrees
     /// from the previous one per update. The paper: `None` (unbounded).
     pub max_turn_degrees: Option<f64>,
+    /// While the previous axis is kept, keep the previous matrix itself
+    /// (only its depth range re-fitted) as long as it holds every relevant
+    /// sample, instead of re-fitting its affine part to the samples (the
+    /// paper). A re-fit follows the samples, which follow the matrix: on a
+    /// still camera the loop need not come to rest. Default off.
+    pub hold: bool,
     /// Grow the rectangle by this fraction of the map on each side (the
     /// samples are sub-sampled). Default 0.01.
     pub margin_fraction: f64,
@@ -107,6 +113,7 @@ impl Default for OptimizeOptions {
             accept_measure: AcceptMeasure::Median,
             snap: None,
             max_turn_degrees: None,
+            hold: false,
             margin_fraction: 0.01,
             shear: false,
             strategy: SearchStrategy::Paper,
@@ -126,6 +133,7 @@ impl OptimizeOptions {
             accept_measure: AcceptMeasure::Median,
             snap: None,
             max_turn_degrees: None,
+            hold: false,
             ..Self::default()
         }
     }
@@ -162,6 +170,9 @@ pub struct OptimizeReport {
     /// The accepted axis was turned less far than the search went
     /// ([`OptimizeOptions::max_turn_degrees`]).
     pub turn_limited: bool,
+    /// The previous matrix was returned unchanged but for its depth range
+    /// ([`OptimizeOptions::hold`]).
+    pub held: bool,
 }
 
 /// The chosen matrix and the report.
@@ -266,9 +277,11 @@ impl Optimizer {
     ///    [`AcceptMeasure`] (the paper: median badness) is below
     ///    `accept_ratio` times the previous one's; an accepted axis turns at
     ///    most [`OptimizeOptions::max_turn_degrees`] from the previous one.
-    /// 5. With [`OptimizeOptions::snap`], the matrix shown is put on a
-    ///    snapped texel grid (the previous matrix's image-plane directions
-    ///    while its axis is kept), where that still holds every sample.
+    /// 5. While the previous axis is kept: with [`OptimizeOptions::hold`],
+    ///    the previous matrix itself where it still holds every sample; with
+    ///    [`OptimizeOptions::snap`], the matrix shown is put on a snapped
+    ///    texel grid (the previous matrix's image-plane directions while its
+    ///    axis is kept, else the new fit's), where that holds every sample.
     ///
     /// # Errors
     /// Only what computing the focused matrix reports (a point light inside
@@ -349,16 +362,19 @@ impl Optimizer {
             Some(p) => (p.homography, Some(new_h)),
         };
         let mut matrix = self.finish(samples, chosen_h);
-        if let Some(snap) = self.options.snap {
+        // The previous matrix's homography in this frame, while its axis is kept.
+        let kept = prev.filter(|_| !accepted).and_then(|m| stable::homography_in(&frame, m));
+        let held = kept
+            .filter(|_| self.options.hold)
+            .map(|h| self.finish(samples, h))
+            .filter(|m| self.holds_samples(samples, m));
+        if let Some(held) = held {
+            matrix = held;
+            report.held = true;
+        } else if let Some(snap) = self.options.snap {
             // The grid's directions: the previous matrix's while its axis is
             // kept, else the new fit's.
-            let reference = match prev.filter(|_| !accepted) {
-                Some(m) => {
-                    let row = |r: usize| frame.axis_from_world_row(m.clip_from_world.row(r));
-                    DMat3::from_cols(row(0), row(1), row(3)).transpose()
-                }
-                None => chosen_h,
-            };
+            let reference = kept.unwrap_or(chosen_h);
             let margin = self.options.margin_fraction.max(0.0);
             let snapped = stable::snap(samples, &reference, chosen_h.row(2), &self.extreme, snap, margin)
                 .map(|h| self.finish(samples, h))
@@ -378,10 +394,12 @@ impl Optimizer {
         if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
             report.accepted = !report.accepted;
             report.snapped = false;
+            report.held = false;
             return Ok(Optimized { matrix: other, report });
         }
         report.fallback = Some(Fallback::NoUsableSamples);
         report.snapped = false;
+        report.held = false;
         let mut matrix = focused;
         matrix.method = Method::Optimized;
         matrix.fallback = Some(Fallback::NoUsableSamples);

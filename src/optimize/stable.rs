@@ -71,6 +71,16 @@ impl Default for TexelSnap {
     }
 }
 
+/// The homography of `m` (rows `x`, `y`, unit axis) in the light
+/// coordinates of `frame`; `None` if it is not finite or has no axis.
+pub(super) fn homography_in(frame: &crate::LightFrame, m: &crate::LightMatrix) -> Option<DMat3> {
+    let row = |r: usize| frame.axis_from_world_row(m.clip_from_world.row(r));
+    let (x, y, w) = (row(0), row(1), row(3));
+    let scale = w.length();
+    let h = DMat3::from_cols(x / scale, y / scale, w / scale).transpose();
+    (scale > 0.0 && h.is_finite()).then_some(h)
+}
+
 /// `from` turned towards `to` by at most `max_radians` (both unit or not;
 /// the result is unit); `to` itself when the angle is within the bound, the
 /// bound is not positive and finite, or the two are (anti-)parallel.
