@@ -6,46 +6,19 @@
 #[path = "render_common/mod.rs"]
 mod render_common;
 
-use lixel::experiment::stability::{self, CameraPath, Variant};
+use lixel::experiment::stability::{self, CameraPath};
 use lixel::experiment::{ExperimentConfig, MethodKind, Preset, SceneSource};
-use lixel::optimize::OptimizeOptions;
 
 fn tiny(out: &std::path::Path) -> ExperimentConfig {
-    // optimized-argmin is left out: on a still camera its Nelder–Mead loop
-    // keeps moving the matrix (0.49 % flicker here); see the ignored test.
     ExperimentConfig {
         scene: SceneSource::Builtin { triangles: 2_000 },
         screen: 64,
         map: 128,
         max_optimize_frames: 12,
         out: out.to_path_buf(),
-        methods: MethodKind::ALL.into_iter().filter(|&m| m != MethodKind::OptimizedArgmin).collect(),
+        methods: MethodKind::ALL.to_vec(),
         ..ExperimentConfig::preset(Preset::Quick)
     }
-}
-
-/// Known defect (issue 19 note): the Nelder–Mead optimizer does not come to
-/// rest on a still camera, so its shadows flicker.
-#[test]
-#[ignore = "known defect: optimized-argmin flickers with a still camera"]
-fn optimized_argmin_is_still_with_a_still_camera() {
-    let Some((device, queue)) = render_common::gpu() else { return };
-    let dir = std::env::temp_dir().join(format!("lixel-stability-argmin-{}", std::process::id()));
-    let config = ExperimentConfig { methods: vec![MethodKind::OptimizedArgmin], ..tiny(&dir) };
-    let rows = stability::measure(&config, &CameraPath::still(3), &device, &queue, &mut |_, _| {}).unwrap();
-    assert_eq!(rows[0].mean_flicker(), 0.0);
-}
-
-#[test]
-fn optimized_argmin_holding_its_matrix_is_still() {
-    let Some((device, queue)) = render_common::gpu() else { return };
-    let dir = std::env::temp_dir().join(format!("lixel-stability-argmin-hold-{}", std::process::id()));
-    let config = tiny(&dir);
-    let hold = OptimizeOptions { hold: true, ..OptimizeOptions::default() };
-    let variants = [Variant { method: MethodKind::OptimizedArgmin, options: "hold".into(), optimize: Some(hold) }];
-    let rows = stability::measure_variants(&config, &variants, &CameraPath::still(6), &device, &queue, &mut |_, _| {})
-        .unwrap();
-    assert_eq!(rows[0].mean_flicker(), 0.0);
 }
 
 #[test]
@@ -61,6 +34,7 @@ fn still_camera_has_zero_flicker_and_a_walk_writes_the_report() {
     for r in &rows {
         assert_eq!(r.flicker.len(), 2, "{}", r.method.name());
         assert_eq!(r.mean_flicker(), 0.0, "{} flickers with a still camera", r.method.name());
+        assert_eq!(r.mean_shimmer(), 0.0, "{} shimmers with a still camera", r.method.name());
     }
 
     let path = CameraPath { frames: 3, walk: 0.05, turn_degrees: 10.0 };

@@ -205,6 +205,11 @@ pub struct StabilityRow {
     pub options: String,
     /// Flicker share per frame transition (`frames - 1` values).
     pub flicker: Vec<f64>,
+    /// Shimmer share per frame transition: the part of the flicker the map
+    /// change alone causes (this frame's masks against the previous frame's
+    /// matrix rendered from this frame's camera; zero for a matrix that did
+    /// not change).
+    pub shimmer: Vec<f64>,
     /// Misclassified pixels per frame.
     pub misclassified: Vec<u64>,
 }
@@ -226,6 +231,12 @@ impl StabilityRow {
         }
         let rank = ((0.95 * v.len() as f64).ceil() as usize).clamp(1, v.len());
         v[rank - 1]
+    }
+
+    /// Mean shimmer per frame transition.
+    #[must_use]
+    pub fn mean_shimmer(&self) -> f64 {
+        mean(self.shimmer.iter().copied())
     }
 
     /// Mean misclassified pixels per frame.
@@ -328,9 +339,14 @@ pub fn measure_variants(
             }
             other => Source::Fixed(other),
         };
-        let mut row =
-            StabilityRow { method, options: variant.options.clone(), flicker: Vec::new(), misclassified: Vec::new() };
-        let mut previous: Option<ShadowMasks> = None;
+        let mut row = StabilityRow {
+            method,
+            options: variant.options.clone(),
+            flicker: Vec::new(),
+            shimmer: Vec::new(),
+            misclassified: Vec::new(),
+        };
+        let mut previous: Option<(ShadowMasks, crate::LightMatrix)> = None;
         for (f, camera) in cameras.iter().enumerate() {
             runner.camera = *camera;
             let matrix = match &mut source {
@@ -349,10 +365,19 @@ pub fn measure_variants(
             };
             let masks = runner.masks(&matrix)?;
             row.misclassified.push(Counts::compare(&masks, &truths[f]).misclassified());
-            if let Some(prev) = &previous {
+            if let Some((prev, prev_matrix)) = &previous {
                 row.flicker.push(Flicker::between(prev, &truths[f - 1], &masks, &truths[f]).share());
+                // The previous frame's map seen from this camera: what the
+                // map change alone flipped.
+                let shimmer = if *prev_matrix == matrix {
+                    0.0
+                } else {
+                    let held = runner.masks(prev_matrix)?;
+                    Flicker::between(&held, &truths[f], &masks, &truths[f]).share()
+                };
+                row.shimmer.push(shimmer);
             }
-            previous = Some(masks);
+            previous = Some((masks, matrix));
             progress(m * path.frames + f + 1, total);
         }
         rows.push(row);
@@ -372,16 +397,17 @@ pub fn write_report(
     rows: &[StabilityRow],
 ) -> Result<String, ExperimentError> {
     std::fs::create_dir_all(out).map_err(|source| ExperimentError::Io { path: out.to_path_buf(), source })?;
-    let mut csv = String::from("method,mean_flicker,p95_flicker,mean_misclassified,frames,options\n");
+    let mut csv = String::from("method,mean_flicker,p95_flicker,mean_misclassified,frames,mean_shimmer,options\n");
     for r in rows {
         let _ = writeln!(
             csv,
-            "{},{:.6},{:.6},{:.1},{},{}",
+            "{},{:.6},{:.6},{:.1},{},{:.6},{}",
             r.method.name(),
             r.mean_flicker(),
             r.p95_flicker(),
             r.mean_misclassified(),
             r.misclassified.len(),
+            r.mean_shimmer(),
             r.options
         );
     }
@@ -401,7 +427,9 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
         md,
         "{} frames: a walk of {:.0} % of the scene diagonal while turning {}°; {:?}, {}² screen, {}² map, one {:?} \
          light (configuration 0), ray-cast truth. Flicker: share of pixels counted in two consecutive frames, whose \
-         truth did not change, whose shadow bit did (mean and 95th percentile over the frame transitions).\n",
+         truth did not change, whose shadow bit did (mean and 95th percentile over the frame transitions). Shimmer: the \
+         part the map change alone causes (the previous frame's matrix rendered from this frame's camera against \
+         this frame's); the rest of the flicker is the camera's pixels moving over the map's fixed texels.\n",
         path.frames,
         path.walk * 100.0,
         path.turn_degrees,
@@ -410,14 +438,17 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
         config.map,
         config.light
     );
-    md.push_str("| method | mean flicker | p95 flicker | misclassified / frame |\n|---|---:|---:|---:|\n");
+    md.push_str(
+        "| method | mean flicker | p95 flicker | mean shimmer | misclassified / frame |\n|---|---:|---:|---:|---:|\n",
+    );
     for r in rows {
         let _ = writeln!(
             md,
-            "| {} | {:.3} % | {:.3} % | {:.0} |",
+            "| {} | {:.3} % | {:.3} % | {:.3} % | {:.0} |",
             r.label(),
             100.0 * r.mean_flicker(),
             100.0 * r.p95_flicker(),
+            100.0 * r.mean_shimmer(),
             r.mean_misclassified()
         );
     }
@@ -575,11 +606,13 @@ mod tests {
             method: MethodKind::Focused,
             options: "default".into(),
             flicker: (1..=20).map(|i| f64::from(i) / 100.0).collect(),
+            shimmer: vec![0.0, 0.5],
             misclassified: vec![10, 20, 30],
         };
         assert!((row.p95_flicker() - 0.19).abs() < 1e-12);
         assert!((row.mean_flicker() - 0.105).abs() < 1e-12);
         assert!((row.mean_misclassified() - 20.0).abs() < 1e-12);
+        assert!((row.mean_shimmer() - 0.25).abs() < 1e-12);
     }
 
     #[test]

@@ -66,7 +66,8 @@ pub enum GradientSource {
     Analytic,
 }
 
-/// Options of the optimizer, with the paper's defaults.
+/// Options of the optimizer: the paper's, but for [`hold`](Self::hold)
+/// ([`OptimizeOptions::paper`] for exactly the paper's).
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimizeOptions {
     /// Gradient iterations. Default 3.
@@ -89,9 +90,11 @@ pub struct OptimizeOptions {
     pub max_turn_degrees: Option<f64>,
     /// While the previous axis is kept, keep the previous matrix itself
     /// (only its depth range re-fitted) as long as it holds every relevant
-    /// sample, instead of re-fitting its affine part to the samples (the
+    /// sample and its re-fit would not replace it under the hysteresis
+    /// above, instead of re-fitting its affine part to the samples (the
     /// paper). A re-fit follows the samples, which follow the matrix: on a
-    /// still camera the loop need not come to rest. Default off.
+    /// still camera the loop need not come to rest. Default on (measured:
+    /// README, "Temporal stability").
     pub hold: bool,
     /// Grow the rectangle by this fraction of the map on each side (the
     /// samples are sub-sampled). Default 0.01.
@@ -113,7 +116,7 @@ impl Default for OptimizeOptions {
             accept_measure: AcceptMeasure::Median,
             snap: None,
             max_turn_degrees: None,
-            hold: false,
+            hold: true,
             margin_fraction: 0.01,
             shear: false,
             strategy: SearchStrategy::Paper,
@@ -124,8 +127,8 @@ impl Default for OptimizeOptions {
 
 impl OptimizeOptions {
     /// The paper's behaviour (Chong & Gortler 2006): the median rule with
-    /// ratio 0.8, no texel snapping, no bound on the rotation of `j`,
-    /// whatever the defaults become.
+    /// ratio 0.8, the kept matrix re-fitted every update, no texel snapping,
+    /// no bound on the rotation of `j`.
     #[must_use]
     pub fn paper() -> Self {
         Self {
@@ -364,8 +367,17 @@ impl Optimizer {
         let mut matrix = self.finish(samples, chosen_h);
         // The previous matrix's homography in this frame, while its axis is kept.
         let kept = prev.filter(|_| !accepted).and_then(|m| stable::homography_in(&frame, m));
+        // Held while the re-fit would not replace it under the same
+        // hysteresis (a camera walking in would otherwise keep a large map).
+        let refit_figure = match self.options.accept_measure {
+            AcceptMeasure::Median => report.median_prev,
+            AcceptMeasure::Objective => report.objective_prev,
+        };
         let held = kept
             .filter(|_| self.options.hold)
+            .filter(|h| {
+                refit_figure.is_some_and(|refit| !(refit < self.options.accept_ratio * self.figure(samples, h)))
+            })
             .map(|h| self.finish(samples, h))
             .filter(|m| self.holds_samples(samples, m));
         if let Some(held) = held {
@@ -480,6 +492,17 @@ impl Optimizer {
         let texel = objective::texel_homography(&homography, samples.problem.map_size());
         let value = objective::objective(&texel, &samples.boundary);
         value.is_finite().then_some(Candidate { axis: homography.row(2), homography, objective: value })
+    }
+
+    /// The hysteresis figure ([`AcceptMeasure`]) of `homography`.
+    fn figure(&mut self, samples: &Samples, homography: &DMat3) -> f64 {
+        match self.options.accept_measure {
+            AcceptMeasure::Median => self.median(samples, homography),
+            AcceptMeasure::Objective => {
+                let texel = objective::texel_homography(homography, samples.problem.map_size());
+                objective::objective(&texel, &samples.boundary)
+            }
+        }
     }
 
     fn median(&mut self, samples: &Samples, homography: &DMat3) -> f64 {

@@ -5,10 +5,15 @@
 //! around the current samples, whose rotation, size and origin follow the
 //! camera continuously: every update resamples the casters at new texel
 //! positions and shadow edges crawl ("shimmer"), as they do for a plain
-//! focused map. And when a new `j` is accepted, the whole map jumps. Three
+//! focused map; and the samples come from an analysis pass rendered with
+//! that very matrix, so on a still camera a re-fit can chase its own
+//! samples for ever. When a new `j` is accepted, the whole map jumps. Four
 //! options of [`OptimizeOptions`](super::OptimizeOptions) act on this, each
 //! off in [`OptimizeOptions::paper`](super::OptimizeOptions::paper):
 //!
+//! - **hold** (on by default): while `j` is kept, the previous matrix is
+//!   kept as it is, as long as it holds every sample and its re-fit would
+//!   not replace it under the hysteresis;
 //! - **hysteresis** ([`AcceptMeasure`] with `accept_ratio`): which figure a
 //!   new matrix must beat the previous one by (the paper: the median
 //!   badness, by 20 %);
@@ -87,7 +92,7 @@ pub(super) fn homography_in(frame: &crate::LightFrame, m: &crate::LightMatrix) -
 pub(super) fn turn_towards(from: DVec3, to: DVec3, max_radians: f64) -> DVec3 {
     let (a, b) = (from.normalize(), to.normalize());
     let angle = a.angle_between(b);
-    if !(max_radians > 0.0 && max_radians.is_finite()) || !(angle > max_radians) {
+    if !(max_radians > 0.0 && max_radians.is_finite() && angle > max_radians) {
         return b;
     }
     match a.cross(b).try_normalize() {
