@@ -65,6 +65,8 @@ mod scene;
 pub mod score;
 pub mod synthetic;
 mod tolerance;
+#[cfg(feature = "view")]
+pub mod view;
 
 pub use camera::{Camera, INFINITE_FAR_CORNER_RATIO};
 pub use error::{LixelError, Result};

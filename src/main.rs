@@ -17,6 +17,9 @@ use lixel::render::Gpu;
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
+#[cfg(feature = "view")]
+mod view_cli;
+
 #[derive(Parser)]
 #[command(
     name = "lixel",
@@ -40,6 +43,11 @@ enum Command {
     /// print how well each samples the visible floor (badness: screen pixels
     /// per texel, squared; lower is better).
     Methods(MethodsArgs),
+    /// An interactive viewer: fly through the scene, switch methods, see
+    /// texel density, the texel grid and errors against ray-cast truth.
+    /// `--screenshot FILE --frames N` renders offscreen without a display.
+    #[cfg(feature = "view")]
+    View(Box<view_cli::ViewArgs>),
 }
 
 #[derive(clap::Args)]
@@ -157,7 +165,7 @@ struct ExperimentArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum BackendArg {
+pub(crate) enum BackendArg {
     /// `WGPU_BACKEND` when set, else Vulkan (lavapipe without a GPU), else GL (llvmpipe).
     Auto,
     /// Vulkan only.
@@ -199,7 +207,7 @@ struct MethodsArgs {
     samples: u32,
 }
 
-fn parse_vec3(s: &str) -> Result<DVec3, String> {
+pub(crate) fn parse_vec3(s: &str) -> Result<DVec3, String> {
     let v: Vec<f64> = s
         .split(',')
         .map(|c| c.trim().parse::<f64>().map_err(|_| format!("{:?} is not a number (expected x,y,z)", c.trim())))
@@ -261,7 +269,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
 }
 
 /// A device on the chosen backend (lavapipe or llvmpipe on machines without a GPU).
-fn gpu(backend: BackendArg) -> Result<Gpu, String> {
+pub(crate) fn gpu(backend: BackendArg) -> Result<Gpu, String> {
     let backends = match backend {
         BackendArg::Auto => None,
         BackendArg::Vulkan => Some(wgpu::Backends::VULKAN),
@@ -471,6 +479,8 @@ fn main() -> ExitCode {
         Command::Experiment(args) => run_experiment(args),
         Command::Merge(args) => run_merge(args),
         Command::Methods(args) => run_methods(args),
+        #[cfg(feature = "view")]
+        Command::View(args) => view_cli::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

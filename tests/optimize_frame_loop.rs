@@ -85,3 +85,38 @@ fn scheduler_keeps_previous_matrices_until_samples_arrive() {
     }
     assert!(scheduler.update(5, &Samples::from_points(&problems[0], &[], &[]), 11).is_err());
 }
+
+#[test]
+fn update_all_equals_light_by_light_updates() {
+    let lights = [
+        Light::directional(DVec3::new(0.5, -1.0, -0.2)),
+        Light::point(DVec3::new(-6.0, 12.0, -2.0)),
+        Light::directional(DVec3::new(-0.3, -1.0, 0.6)),
+    ];
+    let (problems, readback) = setup(&lights);
+    let new = || ShadowScheduler::new(3, ScheduleOptions::default(), Optimizer::new(Default::default())).unwrap();
+    let (mut one_by_one, mut together) = (new(), new());
+    for frame in [10u64, 13, 16] {
+        let all = Samples::from_readback_all(&problems, &readback.as_readback(true), &SampleOptions::default());
+        let mut samples: Vec<lixel::Result<Samples>> = all.unwrap().into_iter().map(Ok).collect();
+        // A light whose samples failed keeps its state in both.
+        if frame == 13 {
+            samples[1] = Err(lixel::LixelError::UnusableSamples { reason: "test" });
+        }
+        let reports = together.update_all(samples.clone(), frame).unwrap();
+        for (k, (samples, report)) in samples.iter().zip(&reports).enumerate() {
+            match samples {
+                Ok(samples) => {
+                    let expected = one_by_one.update(k, samples, frame).unwrap().clone();
+                    assert_eq!(report.as_ref().unwrap(), &expected, "light {k}, frame {frame}");
+                }
+                Err(_) => assert!(report.is_err()),
+            }
+            assert_eq!(together.matrix(k), one_by_one.matrix(k), "light {k}, frame {frame}");
+            assert_eq!(together.optimized_frame(k), one_by_one.optimized_frame(k));
+        }
+    }
+    assert_eq!(together.optimized_frame(1), Some(16));
+    // One sample set per light, or a typed refusal.
+    assert!(together.update_all(Vec::new(), 20).is_err());
+}

@@ -60,9 +60,11 @@ impl Default for ScheduleOptions {
     }
 }
 
-/// Per-light state of the frame loop.
-#[derive(Clone, Debug, Default)]
+/// Per-light state of the frame loop. Each light has its own optimizer (its
+/// buffers), so that lights can be optimized concurrently.
+#[derive(Clone, Debug)]
 struct LightState {
+    optimizer: Optimizer,
     matrix: Option<LightMatrix>,
     optimized_frame: Option<u64>,
     last_report: Option<OptimizeReport>,
@@ -75,14 +77,14 @@ struct LightState {
 ///                if plan.analysis: render the analysis pass (light i looked up in a
 ///                                  focused map where plan.is_focused(i)), start its readback
 /// when a readback arrives (frames later):
-///                for each light: scheduler.update(light, &samples, frame)
+///                scheduler.update_all(Samples::from_readback_all(..), frame)
+///                (or, light by light, scheduler.update(light, &samples, frame))
 /// render with:   scheduler.matrix(light) (falls back to your focused matrix while None)
 /// ```
 #[derive(Clone, Debug)]
 pub struct ShadowScheduler {
     options: ScheduleOptions,
     lights: Vec<LightState>,
-    optimizer: Optimizer,
 }
 
 impl ShadowScheduler {
@@ -97,7 +99,8 @@ impl ShadowScheduler {
         if options.optimize_every == 0 || options.focused_every == 0 {
             return Err(LixelError::UnusableSamples { reason: "cadences must be at least 1" });
         }
-        Ok(Self { options, lights: vec![LightState::default(); light_count], optimizer })
+        let state = LightState { optimizer, matrix: None, optimized_frame: None, last_report: None };
+        Ok(Self { options, lights: vec![state; light_count] })
     }
 
     /// What to render in frame `frame`: an analysis pass every
@@ -130,6 +133,12 @@ impl ShadowScheduler {
         let scale =
             |side: u32| ((u64::from(side) * u64::from(limit) + u64::from(larger) / 2) / u64::from(larger)).max(1);
         ShadowMapSize { width: scale(map.width) as u32, height: scale(map.height) as u32 }
+    }
+
+    /// The number of lights it schedules.
+    #[must_use]
+    pub fn light_count(&self) -> usize {
+        self.lights.len()
     }
 
     /// The matrix to render light `light` with, once one has been computed.
@@ -168,9 +177,41 @@ impl ShadowScheduler {
     /// whatever [`Optimizer::optimize`] reports (the state is then unchanged).
     pub fn update(&mut self, light: usize, samples: &Samples, frame: u64) -> Result<&OptimizeReport> {
         let state = self.lights.get_mut(light).ok_or(LixelError::UnusableSamples { reason: "no such light" })?;
-        let optimized = self.optimizer.optimize(samples, state.matrix.as_ref())?;
-        state.matrix = Some(optimized.matrix);
-        state.optimized_frame = Some(frame);
-        Ok(state.last_report.insert(optimized.report))
+        state.update(samples, frame)
+    }
+
+    /// [`Self::update`] for every light at once: `samples[i]` belongs to light
+    /// `i` (an `Err` there is passed through and leaves the light as it
+    /// was). With the `rayon` feature the lights are optimized in parallel;
+    /// the results equal light-by-light [`Self::update`] calls.
+    ///
+    /// # Errors
+    /// [`LixelError::UnusableSamples`] when `samples` does not have one entry
+    /// per light; each light's own error is in its entry.
+    pub fn update_all(&mut self, samples: Vec<Result<Samples>>, frame: u64) -> Result<Vec<Result<OptimizeReport>>> {
+        if samples.len() != self.lights.len() {
+            return Err(LixelError::UnusableSamples { reason: "one sample set per light" });
+        }
+        let one = |(state, samples): (&mut LightState, Result<Samples>)| {
+            samples.and_then(|samples| state.update(&samples, frame).cloned())
+        };
+        #[cfg(feature = "rayon")]
+        {
+            use rayon::prelude::*;
+            Ok(self.lights.par_iter_mut().zip(samples).map(one).collect())
+        }
+        #[cfg(not(feature = "rayon"))]
+        {
+            Ok(self.lights.iter_mut().zip(samples).map(one).collect())
+        }
+    }
+}
+
+impl LightState {
+    fn update(&mut self, samples: &Samples, frame: u64) -> Result<&OptimizeReport> {
+        let optimized = self.optimizer.optimize(samples, self.matrix.as_ref())?;
+        self.matrix = Some(optimized.matrix);
+        self.optimized_frame = Some(frame);
+        Ok(self.last_report.insert(optimized.report))
     }
 }

@@ -120,7 +120,11 @@ impl AnalysisReadback {
         Self::samples_from(&self.optimizer_input(&bits), self.camera, light, bounds, map, index)
     }
 
-    /// The samples of every light: `lights[i]` is bit `i` of the pass.
+    /// The samples of every light: `lights[i]` is bit `i` of the pass. One
+    /// pass over the readback serves every light
+    /// ([`Samples::from_readback_all`](crate::Samples::from_readback_all));
+    /// a light whose problem cannot be built gets its error and the others
+    /// their samples.
     #[must_use]
     pub fn samples_all(
         &self,
@@ -130,9 +134,18 @@ impl AnalysisReadback {
     ) -> Vec<crate::Result<crate::Samples>> {
         let bits = self.optimizer_bits();
         let input = self.optimizer_input(&bits);
-        (0..lights.len().min(crate::MAX_LIGHTS))
-            .map(|i| Self::samples_from(&input, self.camera, lights[i], bounds, map, i as u32))
-            .collect()
+        let lights = &lights[..lights.len().min(crate::MAX_LIGHTS)];
+        let problems: crate::Result<Vec<_>> =
+            lights.iter().map(|&light| crate::ShadowProblem::new(self.camera, light, bounds, map)).collect();
+        let options = crate::optimize::SampleOptions::default();
+        match problems.and_then(|problems| crate::Samples::from_readback_all(&problems, &input, &options)) {
+            Ok(all) => all.into_iter().map(Ok).collect(),
+            // Some light's problem failed: light by light, so that each
+            // keeps its own bit and its own error.
+            Err(_) => (0..lights.len())
+                .map(|i| Self::samples_from(&input, self.camera, lights[i], bounds, map, i as u32))
+                .collect(),
+        }
     }
 
     fn samples_from(

@@ -194,21 +194,24 @@ impl ShadowLoop {
     ///
     /// # Errors
     /// [`LoopError::Render`] when the renderer refuses the frame;
-    /// [`LoopError::Solve`] when a light's matrix cannot be solved. A light
+    /// [`LoopError::Solve`] when a light's matrix cannot be solved or the
+    /// view's lights differ in number from the loop's. A light
     /// whose optimization fails is not an error: it keeps its matrix
     /// ([`LoopFrame::failed`]).
     pub fn frame(&mut self, renderer: &mut Renderer, view: &LoopView<'_>) -> Result<LoopFrame, LoopError> {
+        self.check_lights(view)?;
         let analyses = self.policy.analyses();
         let optimizing = Instant::now();
         let (mut optimized, mut failed, mut fallbacks) = (0u32, 0u32, Vec::new());
         let readback = if analyses { renderer.try_take_analysis() } else { None };
         if let Some(r) = &readback {
             // The samples belong to the camera the pass was rendered with.
-            for (i, samples) in r.samples_all(view.lights, view.bounds, view.map).into_iter().enumerate() {
-                match samples.and_then(|s| Ok(self.scheduler.update(i, &s, self.frame)?.fallback)) {
-                    Ok(fallback) => {
+            let samples = r.samples_all(view.lights, view.bounds, view.map);
+            for (i, report) in self.scheduler.update_all(samples, self.frame)?.into_iter().enumerate() {
+                match report {
+                    Ok(report) => {
                         optimized |= 1 << i;
-                        fallbacks.extend(fallback.map(|f| (i, f)));
+                        fallbacks.extend(report.fallback.map(|f| (i, f)));
                     }
                     Err(_) => failed |= 1 << i,
                 }
@@ -257,6 +260,15 @@ impl ShadowLoop {
         Ok(LoopFrame { matrices, render, readback, optimized, failed, fallbacks, optimize_time, solve_time })
     }
 
+    /// The view has as many lights as the loop was made for.
+    fn check_lights(&self, view: &LoopView<'_>) -> Result<(), LixelError> {
+        if view.lights.len() == self.scheduler.light_count() {
+            Ok(())
+        } else {
+            Err(LixelError::UnusableSamples { reason: "the view's lights differ in number from the loop's" })
+        }
+    }
+
     /// Renders the loop's frame (no masks, the loop's lookup) and counts it.
     fn render(
         &mut self,
@@ -287,6 +299,7 @@ impl ShadowLoop {
         view: &LoopView<'_>,
         max_frames: usize,
     ) -> Result<Settled, LoopError> {
+        self.check_lights(view)?;
         for (i, m) in view.solve(view.map, &Parameterization::Focused)?.into_iter().enumerate() {
             self.scheduler.set_matrix(i, m);
         }
@@ -307,8 +320,9 @@ impl ShadowLoop {
             };
             let mut fallbacks = Vec::with_capacity(view.lights.len());
             let mut moved = false;
-            for (i, samples) in readback.samples_all(view.lights, view.bounds, view.map).into_iter().enumerate() {
-                let report = self.scheduler.update(i, &samples?, self.frame)?;
+            let samples = readback.samples_all(view.lights, view.bounds, view.map);
+            for report in self.scheduler.update_all(samples, self.frame)? {
+                let report = report?;
                 moved |= report.accepted && report.fallback.is_none();
                 fallbacks.push(report.fallback);
             }

@@ -464,6 +464,13 @@ impl Renderer {
         &self.ring
     }
 
+    /// The last frame's camera colour texture and depth view (the viewer's
+    /// overlays read them on the GPU); `None` before the first frame.
+    #[cfg(feature = "view")]
+    pub(crate) fn camera_textures(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
+        self.camera_targets.as_ref().map(|t| (&t.color.texture, &t.depth.view))
+    }
+
     /// Renders and submits one frame. Never waits for the GPU.
     ///
     /// # Errors
