@@ -18,6 +18,7 @@
 //! |---|---|---|
 //! | `Normal` | uniform map around every receiver the light reaches | — |
 //! | `Focused` | uniform map around the receivers the view frustum sees | Brabec et al. 2002 |
+//! | `FocusedSnapped` | the focused map with world-fixed axes, texel size on a ladder, origin snapped to whole texels (engines' anti-shimmer) | Unity/Bevy practice |
 //! | `Psm` | uniform in the camera's post-perspective space, with hull `H = conv(V ∪ l) ∩ S ∩ L` and virtual camera shift | Stamminger & Drettakis 2002 |
 //! | `LiSpsm` | perspective frustum in light space along the projected view direction, simple or general `n_opt` | Wimmer, Scherzer & Purgathofer 2004 |
 //! | `PlaneOptimal` | exactly uniform sampling on one receiver plane | Chong & Gortler 2004 |
@@ -74,7 +75,8 @@ pub use error::{LixelError, Result};
 pub use light::{Light, LightFrame};
 pub use matrix::{light_distance, DepthRange, Fallback, LightDistance, LightMatrix, Method};
 pub use methods::{
-    psm_light_case, LiSpsmOptions, NOpt, Parameterization, PlaneOptimalOptions, PsmLightCase, PsmOptions,
+    psm_light_case, FocusedSnappedOptions, LiSpsmOptions, NOpt, Parameterization, PlaneOptimalOptions, PsmLightCase,
+    PsmOptions,
 };
 pub use optimize::{optimize_light_matrix, OptimizeOptions, OptimizeReport, Optimized, Optimizer, Samples};
 pub use problem::ShadowProblem;

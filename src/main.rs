@@ -108,7 +108,7 @@ struct ExperimentArgs {
     /// Square shadow-map resolution.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     map: Option<u32>,
-    /// Comma-separated methods: normal, focused, lispsm, psm, plane-optimal, optimized, optimized-argmin,
+    /// Comma-separated methods: normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized, optimized-argmin,
     /// each optionally with `+spsm` (sub-pixel shadow-map lookup), e.g. focused+spsm.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
@@ -151,6 +151,17 @@ struct ExperimentArgs {
     /// Measure the frame-time table (the paper's Table 2) instead.
     #[arg(long)]
     timing: bool,
+    /// Measure temporal stability (flicker along a scripted camera walk)
+    /// instead: stability.csv, stability.md and SVG plots in --out.
+    #[arg(long, conflicts_with = "timing")]
+    stability: bool,
+    /// Frames of the --stability camera path (default: 120, quick preset 12).
+    #[arg(long)]
+    stability_frames: Option<usize>,
+    /// With --stability: also measure the scene optimizer's stability
+    /// option sets (hysteresis rules, texel snapping, bounded rotation).
+    #[arg(long, requires = "stability")]
+    stability_options: bool,
     /// Frames timed per pipeline and cell of the timing table (rounded up to
     /// whole 15-frame blocks).
     #[arg(long, default_value_t = 60)]
@@ -336,6 +347,27 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
     let gpu = gpu(args.backend)?;
     let (device, queue) = (&gpu.device, &gpu.queue);
     eprintln!("adapter: {}", gpu.describe());
+    if args.stability {
+        use experiment::stability::{self, Variant};
+        let mut path = stability::CameraPath::preset(args.preset);
+        path.frames = args.stability_frames.unwrap_or(path.frames);
+        let mut variants: Vec<Variant> = config.methods.iter().map(|&m| Variant::of(m)).collect();
+        if args.stability_options {
+            variants.extend(Variant::optimizer_option_sets());
+        }
+        eprintln!("stability: {} methods and option sets x {} frames...", variants.len(), path.frames);
+        let quiet = args.quiet;
+        let mut progress = |done: usize, total: usize| {
+            if !quiet && (done % 10 == 0 || done == total) {
+                eprintln!("  {done}/{total} frames");
+            }
+        };
+        let rows = stability::measure_variants(&config, &variants, &path, device, queue, &mut progress)
+            .map_err(|e| e.to_string())?;
+        let md = stability::write_report(&config.out, &config, &path, &rows).map_err(|e| e.to_string())?;
+        println!("{md}\n(written to {})", config.out.display());
+        return Ok(());
+    }
     if args.timing {
         let options = TimingOptions {
             frames: args.timing_frames,

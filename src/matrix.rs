@@ -18,6 +18,9 @@ pub enum Method {
     Normal,
     /// Uniform map limited to what the view frustum can see.
     Focused,
+    /// Focused with world-fixed axes and a texel-snapped grid (engines'
+    /// stabilization).
+    FocusedSnapped,
     /// Perspective shadow maps (Stamminger & Drettakis 2002).
     Psm,
     /// Light-space perspective shadow maps (Wimmer et al. 2004).
@@ -36,6 +39,7 @@ impl Method {
         match self {
             Self::Normal => "normal",
             Self::Focused => "focused",
+            Self::FocusedSnapped => "focused-snapped",
             Self::Psm => "psm",
             Self::LiSpsm => "lispsm",
             Self::PlaneOptimal => "plane-optimal",
@@ -272,7 +276,7 @@ pub(crate) fn fit_homography(
 /// one (whose `X~` all have third coordinate 1). Relative, so a far point
 /// light, whose points all sit within a tiny angle, is judged as the
 /// directional light it approaches.
-fn in_front(frame: &LightFrame, tolerances: &Tolerances, j: DVec3, xs: &[DVec3]) -> bool {
+pub(crate) fn in_front(frame: &LightFrame, tolerances: &Tolerances, j: DVec3, xs: &[DVec3]) -> bool {
     let w = |x: &DVec3| if frame.is_orthographic() { j.dot(*x) } else { j.dot(*x) / x.length() };
     let max_w = xs.iter().map(w).fold(0.0, f64::max);
     max_w > 0.0 && xs.iter().all(|x| w(x) > tolerances.min_front_cosine * max_w)
@@ -328,7 +332,16 @@ impl Placement<'_> {
             &mut scratch,
         )
         .ok_or(LixelError::NotInFront { method: self.method })?;
-        let matrix = self.finish(homography, &xs);
+        self.finish_checked(homography, &xs)
+    }
+
+    /// [`finish`](Self::finish), then checked: every focus and depth point
+    /// in the map and the depth range in world coordinates.
+    ///
+    /// # Errors
+    /// [`LixelError::NotInFront`] when the matrix does not hold them.
+    pub(crate) fn finish_checked(&self, homography: DMat3, xs: &[DVec3]) -> Result<LightMatrix> {
+        let matrix = self.finish(homography, xs);
         // Checked again as a renderer will evaluate it, in world coordinates:
         // composing `G` with a far light's translation can round differently.
         let slack = self.tolerances.coverage_slack;

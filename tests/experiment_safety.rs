@@ -180,7 +180,11 @@ fn the_command_line_names_each_invalid_flag() {
         assert!(!ok && e.contains(flag), "{flag}: {e}");
     }
     let (_, e) = run(&["--methods", "bogus"]);
-    assert!(e.contains("\"bogus\"") && e.contains("normal, focused, lispsm, psm, plane-optimal, optimized"), "{e}");
+    assert!(
+        e.contains("\"bogus\"")
+            && e.contains("normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized"),
+        "{e}"
+    );
     let (_, e) = run(&["--resume", "--force"]);
     assert!(e.contains("--resume") && e.contains("--force") && e.contains("cannot be used with"), "{e}");
     let (_, e) = run(&["--shard", "4/4"]);

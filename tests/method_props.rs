@@ -126,7 +126,9 @@ fn error_is_justified(problem: &ShadowProblem, err: &LixelError, param: &Paramet
             // Point lights only: a spot under 89° always fits its own frustum.
             let Light::Point { position: l } = *problem.light() else { return false };
             let in_receivers = expand(&problem.bounds().receivers, 1e-6 * scale).contains(l);
-            in_receivers && (matches!(param, Parameterization::Normal) || in_view(problem, l, 1e-6))
+            // Normal and focused-snapped aim along the cone around all receivers.
+            let whole = matches!(param, Parameterization::Normal | Parameterization::FocusedSnapped(_));
+            in_receivers && (whole || in_view(problem, l, 1e-6))
         }
         LixelError::NothingVisible { .. } => {
             sample.is_empty()
@@ -222,6 +224,11 @@ fn normal_keeps_every_relevant_point() {
 #[test]
 fn focused_keeps_every_relevant_point() {
     run(Parameterization::Focused, 2);
+}
+
+#[test]
+fn focused_snapped_keeps_every_relevant_point() {
+    run(Parameterization::FocusedSnapped(Default::default()), 7);
 }
 
 #[test]

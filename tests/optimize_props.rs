@@ -147,13 +147,26 @@ fn relevant_world(camera: &Camera, rb: &lixel::synthetic::SyntheticReadback, bit
     out
 }
 
+/// Every stability option on (issue 19): the contract holds for them too.
+fn stability_options() -> OptimizeOptions {
+    OptimizeOptions {
+        accept_measure: lixel::optimize::AcceptMeasure::Objective,
+        snap: Some(lixel::optimize::TexelSnap::DEFAULT),
+        max_turn_degrees: Some(5.0),
+        ..OptimizeOptions::default()
+    }
+}
+
 #[test]
 fn optimized_matrices_keep_every_relevant_sample_over_synthetic_scenes() {
     let n = common::cases();
     let mut failures = Vec::new();
-    let (mut optimized, mut fallbacks, mut errors, mut accepted) = (0, 0, 0, 0);
-    let mut optimizer = Optimizer::new(OptimizeOptions::default());
+    let (mut optimized, mut fallbacks, mut errors, mut accepted, mut snapped) = (0, 0, 0, 0, 0);
+    let mut paper = Optimizer::new(OptimizeOptions::default());
+    let mut stable = Optimizer::new(stability_options());
     for i in 0..n {
+        // Every other pair of scenes with the stability options on.
+        let optimizer = if i % 4 >= 2 { &mut stable } else { &mut paper };
         let mut rng = ChaCha8Rng::seed_from_u64(1000 + i as u64);
         let synthetic = scene(&mut rng);
         let eye = DVec3::new(rng.random_range(-18.0..18.0), rng.random_range(0.3..4.0), rng.random_range(-18.0..18.0));
@@ -200,6 +213,7 @@ fn optimized_matrices_keep_every_relevant_sample_over_synthetic_scenes() {
                     optimized += 1;
                 }
                 accepted += usize::from(r.accepted);
+                snapped += usize::from(r.snapped);
                 if r.fallback.is_none() && !(r.objective_new <= r.objective_start) {
                     failures
                         .push(format!("#{i}: objective {} worse than start {}", r.objective_new, r.objective_start));
@@ -216,10 +230,12 @@ fn optimized_matrices_keep_every_relevant_sample_over_synthetic_scenes() {
         }
     }
     eprintln!(
-        "{n} synthetic scenes: {optimized} optimized ({accepted} accepted), {fallbacks} fallbacks, {errors} errors"
+        "{n} synthetic scenes: {optimized} optimized ({accepted} accepted, {snapped} snapped), {fallbacks} fallbacks, \
+         {errors} errors"
     );
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures[..failures.len().min(5)].join("\n"));
     assert!(optimized > n / 2, "only {optimized} of {n} scenes had shadow boundaries in view");
+    assert!(snapped > optimized / 4, "only {snapped} of the {optimized} optimized matrices were snapped");
 }
 
 fn walkthrough_problem(light: Light) -> (ShadowProblem, SyntheticScene) {
@@ -407,8 +423,10 @@ fn degenerate_sample_sets_with_prev_keep_every_sample() {
     let n = common::cases() / 4;
     let mut failures = Vec::new();
     let mut outcomes: std::collections::BTreeMap<String, usize> = Default::default();
-    let mut optimizer = Optimizer::new(OptimizeOptions::default());
+    let mut paper = Optimizer::new(OptimizeOptions::default());
+    let mut stable = Optimizer::new(stability_options());
     for i in 0..2 * n {
+        let optimizer = if (i / 4) % 2 == 1 { &mut stable } else { &mut paper };
         let (config, region) = if i < n {
             (common::config(11, i), "general".to_string())
         } else {

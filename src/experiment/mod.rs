@@ -27,6 +27,7 @@ mod report;
 mod rows;
 mod rundir;
 mod shard;
+pub mod stability;
 mod timing;
 
 use std::path::PathBuf;
@@ -64,6 +65,8 @@ pub enum MethodKind {
     Normal,
     /// Uniform around the visible receivers.
     Focused,
+    /// Focused with world-fixed axes and a texel-snapped grid.
+    FocusedSnapped,
     /// Light-space perspective.
     #[serde(rename = "lispsm")]
     LiSpsm,
@@ -80,6 +83,8 @@ pub enum MethodKind {
     NormalSpsm,
     /// `focused+spsm`.
     FocusedSpsm,
+    /// `focused-snapped+spsm`.
+    FocusedSnappedSpsm,
     /// `lispsm+spsm`.
     LiSpsmSpsm,
     /// `psm+spsm`.
@@ -95,9 +100,10 @@ pub enum MethodKind {
 
 impl MethodKind {
     /// Every method, in report order.
-    pub const ALL: [Self; 7] = [
+    pub const ALL: [Self; 8] = [
         Self::Normal,
         Self::Focused,
+        Self::FocusedSnapped,
         Self::LiSpsm,
         Self::Psm,
         Self::PlaneOptimal,
@@ -106,9 +112,10 @@ impl MethodKind {
     ];
 
     /// Every method with the SPSM lookup (`<method>+spsm`), in report order.
-    pub const ALL_SPSM: [Self; 7] = [
+    pub const ALL_SPSM: [Self; 8] = [
         Self::NormalSpsm,
         Self::FocusedSpsm,
+        Self::FocusedSnappedSpsm,
         Self::LiSpsmSpsm,
         Self::PsmSpsm,
         Self::PlaneOptimalSpsm,
@@ -154,6 +161,7 @@ impl MethodKind {
         match self.base() {
             Self::Normal => Method::Normal,
             Self::Focused => Method::Focused,
+            Self::FocusedSnapped => Method::FocusedSnapped,
             Self::LiSpsm => Method::LiSpsm,
             Self::Psm => Method::Psm,
             Self::PlaneOptimal => Method::PlaneOptimal,
@@ -170,6 +178,7 @@ impl MethodKind {
             Self::OptimizedArgmin => "optimized-argmin",
             Self::NormalSpsm => "normal+spsm",
             Self::FocusedSpsm => "focused+spsm",
+            Self::FocusedSnappedSpsm => "focused-snapped+spsm",
             Self::LiSpsmSpsm => "lispsm+spsm",
             Self::PsmSpsm => "psm+spsm",
             Self::PlaneOptimalSpsm => "plane-optimal+spsm",
@@ -747,6 +756,7 @@ impl<'a> Runner<'a> {
         let p = match method {
             K::Normal | K::NormalSpsm => Parameterization::Normal,
             K::Focused | K::FocusedSpsm => Parameterization::Focused,
+            K::FocusedSnapped | K::FocusedSnappedSpsm => Parameterization::FocusedSnapped(Default::default()),
             K::LiSpsm | K::LiSpsmSpsm => Parameterization::LiSpsm(Default::default()),
             K::Psm | K::PsmSpsm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
             K::PlaneOptimal | K::PlaneOptimalSpsm => Parameterization::PlaneOptimal(Default::default()),
@@ -932,4 +942,23 @@ pub fn run(
     let completeness =
         finish::Completeness { adapter: crate::render::device::describe(&device.adapter_info()), ..Default::default() };
     finish::finish(&mut runner, config, dir.path(), &rows, &completeness, warnings, started)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_method_pairs_with_its_spsm_variant() {
+        assert_eq!(MethodKind::ALL.len(), MethodKind::ALL_SPSM.len());
+        for (&plain, &spsm) in MethodKind::ALL.iter().zip(&MethodKind::ALL_SPSM) {
+            assert_eq!(plain.with_spsm(), spsm);
+            assert_eq!(spsm.base(), plain);
+            assert_eq!(spsm.method(), plain.method());
+            assert!(spsm.spsm() && !plain.spsm());
+            assert_eq!(spsm.name(), format!("{}+spsm", plain.name()));
+            assert_eq!(MethodKind::parse(spsm.name()), Some(spsm));
+            assert_eq!(MethodKind::parse(plain.name()), Some(plain));
+        }
+    }
 }

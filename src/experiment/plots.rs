@@ -31,7 +31,7 @@ fn register_font() {
 
 /// Line colour of each method (a method with the SPSM lookup: its base
 /// method's hue, darker).
-fn color(method: MethodKind) -> RGBColor {
+pub(super) fn color(method: MethodKind) -> RGBColor {
     if method.spsm() {
         let RGBColor(r, g, b) = color(method.base());
         return RGBColor(r / 2, g / 2, b / 2);
@@ -39,6 +39,7 @@ fn color(method: MethodKind) -> RGBColor {
     match method {
         MethodKind::Normal => RGBColor(120, 120, 120),
         MethodKind::Focused => RGBColor(31, 119, 180),
+        MethodKind::FocusedSnapped => RGBColor(23, 190, 207),
         MethodKind::LiSpsm => RGBColor(44, 160, 44),
         MethodKind::Psm => RGBColor(148, 103, 189),
         MethodKind::PlaneOptimal => RGBColor(255, 127, 14),

@@ -3,6 +3,7 @@
 //! affine fit and the depth row are shared (see [`crate::matrix`]).
 
 pub(crate) mod focused;
+mod focused_snapped;
 mod lispsm;
 mod normal;
 mod plane_optimal;
@@ -16,6 +17,8 @@ use crate::light::{Light, LightFrame};
 use crate::matrix::{LightMatrix, Method};
 use crate::problem::ShadowProblem;
 
+pub use focused_snapped::FocusedSnappedOptions;
+pub(crate) use focused_snapped::{snapped_homography, SnapGrid};
 pub use lispsm::{LiSpsmOptions, NOpt};
 pub use plane_optimal::PlaneOptimalOptions;
 pub use psm::{psm_light_case, PsmLightCase, PsmOptions};
@@ -28,6 +31,9 @@ pub enum Parameterization {
     Normal,
     /// Uniform map around the receivers the view frustum can see.
     Focused,
+    /// The focused map with world-fixed axes and a snapped texel grid (what
+    /// engines ship against shimmering).
+    FocusedSnapped(FocusedSnappedOptions),
     /// Perspective shadow maps.
     Psm(PsmOptions),
     /// Light-space perspective shadow maps.
@@ -38,9 +44,10 @@ pub enum Parameterization {
 
 impl Parameterization {
     /// Every classical method with default options, in the papers' order.
-    pub const ALL_DEFAULT: [Self; 5] = [
+    pub const ALL_DEFAULT: [Self; 6] = [
         Self::Normal,
         Self::Focused,
+        Self::FocusedSnapped(FocusedSnappedOptions::DEFAULT),
         Self::Psm(PsmOptions::DEFAULT),
         Self::LiSpsm(LiSpsmOptions::DEFAULT),
         Self::PlaneOptimal(PlaneOptimalOptions::DEFAULT),
@@ -52,6 +59,7 @@ impl Parameterization {
         match self {
             Self::Normal => Method::Normal,
             Self::Focused => Method::Focused,
+            Self::FocusedSnapped(_) => Method::FocusedSnapped,
             Self::Psm(_) => Method::Psm,
             Self::LiSpsm(_) => Method::LiSpsm,
             Self::PlaneOptimal(_) => Method::PlaneOptimal,
@@ -72,6 +80,7 @@ impl ShadowProblem {
         match parameterization {
             Parameterization::Normal => normal::solve(self),
             Parameterization::Focused => focused::solve(self),
+            Parameterization::FocusedSnapped(options) => focused_snapped::solve(self, options),
             Parameterization::Psm(options) => psm::solve(self, options),
             Parameterization::LiSpsm(options) => lispsm::solve(self, options),
             Parameterization::PlaneOptimal(options) => plane_optimal::solve(self, options),

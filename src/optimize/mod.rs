@@ -15,6 +15,7 @@ mod objective;
 mod samples;
 mod schedule;
 mod search;
+mod stable;
 
 use glam::{DMat3, DVec2, DVec3};
 
@@ -29,6 +30,7 @@ pub use objective::{
 };
 pub use samples::{PixelRect, Readback, ReadbackDepth, ReadbackLayout, RowOrder, SampleCounts, SampleOptions, Samples};
 pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
+pub use stable::{AcceptMeasure, TexelSnap};
 
 /// The paper's rotation angles, in degrees (one negative for exploration).
 pub const PAPER_ANGLES_DEGREES: [f64; 9] = [-10.0, 3.0, 5.0, 9.0, 16.0, 23.0, 30.0, 40.0, 50.0];
@@ -64,16 +66,36 @@ pub enum GradientSource {
     Analytic,
 }
 
-/// Options of the optimizer, with the paper's defaults.
+/// Options of the optimizer: the paper's, but for [`hold`](Self::hold)
+/// ([`OptimizeOptions::paper`] for exactly the paper's).
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimizeOptions {
     /// Gradient iterations. Default 3.
     pub iterations: usize,
     /// Rotation angles tried per iteration, degrees. Default [`PAPER_ANGLES_DEGREES`].
     pub angles_degrees: Vec<f64>,
-    /// Accept the new matrix only if its median badness is below this times
-    /// the previous matrix's (re-fitted to the current samples). Default 0.8.
+    /// Hysteresis: accept the new matrix only if its
+    /// [`accept_measure`](Self::accept_measure) is below this times the
+    /// previous matrix's (re-fitted to the current samples). Default 0.8.
     pub accept_ratio: f64,
+    /// What the hysteresis compares. Default [`AcceptMeasure::Median`] (the
+    /// paper).
+    pub accept_measure: AcceptMeasure,
+    /// Texel snapping of the affine part: the image-plane directions are kept
+    /// while `j` is, the texel size is on a ladder and the origin on whole
+    /// texels ([`TexelSnap`]). The paper: `None`.
+    pub snap: Option<TexelSnap>,
+    /// Bounded rotation: an accepted axis turns at most this many degrees
+    /// from the previous one per update. The paper: `None` (unbounded).
+    pub max_turn_degrees: Option<f64>,
+    /// While the previous axis is kept, keep the previous matrix itself
+    /// (only its depth range re-fitted) as long as it holds every relevant
+    /// sample and its re-fit would not replace it under the hysteresis
+    /// above, instead of re-fitting its affine part to the samples (the
+    /// paper). A re-fit follows the samples, which follow the matrix: on a
+    /// still camera the loop need not come to rest. Default on (measured:
+    /// README, "Temporal stability").
+    pub hold: bool,
     /// Grow the rectangle by this fraction of the map on each side (the
     /// samples are sub-sampled). Default 0.01.
     pub margin_fraction: f64,
@@ -91,10 +113,31 @@ impl Default for OptimizeOptions {
             iterations: 3,
             angles_degrees: PAPER_ANGLES_DEGREES.to_vec(),
             accept_ratio: 0.8,
+            accept_measure: AcceptMeasure::Median,
+            snap: None,
+            max_turn_degrees: None,
+            hold: true,
             margin_fraction: 0.01,
             shear: false,
             strategy: SearchStrategy::Paper,
             gradient: GradientSource::Refit,
+        }
+    }
+}
+
+impl OptimizeOptions {
+    /// The paper's behaviour (Chong & Gortler 2006): the median rule with
+    /// ratio 0.8, the kept matrix re-fitted every update, no texel snapping,
+    /// no bound on the rotation of `j`.
+    #[must_use]
+    pub fn paper() -> Self {
+        Self {
+            accept_ratio: 0.8,
+            accept_measure: AcceptMeasure::Median,
+            snap: None,
+            max_turn_degrees: None,
+            hold: false,
+            ..Self::default()
         }
     }
 }
@@ -124,6 +167,15 @@ pub struct OptimizeReport {
     pub relevant_samples: usize,
     /// Set when the focused matrix was returned instead.
     pub fallback: Option<Fallback>,
+    /// The matrix returned is on a snapped texel grid
+    /// ([`OptimizeOptions::snap`]).
+    pub snapped: bool,
+    /// The accepted axis was turned less far than the search went
+    /// ([`OptimizeOptions::max_turn_degrees`]).
+    pub turn_limited: bool,
+    /// The previous matrix was returned unchanged but for its depth range
+    /// ([`OptimizeOptions::hold`]).
+    pub held: bool,
 }
 
 /// The chosen matrix and the report.
@@ -224,8 +276,15 @@ impl Optimizer {
     ///    is the minimum-area rectangle around the relevant samples, and a
     ///    candidate that puts any relevant sample behind the light is skipped.
     ///    The result's objective is never worse than the start's.
-    /// 4. Accepts the result over the previous matrix only if its median
-    ///    badness is below `accept_ratio` times the previous one's.
+    /// 4. Accepts the result over the previous matrix only if its
+    ///    [`AcceptMeasure`] (the paper: median badness) is below
+    ///    `accept_ratio` times the previous one's; an accepted axis turns at
+    ///    most [`OptimizeOptions::max_turn_degrees`] from the previous one.
+    /// 5. While the previous axis is kept: with [`OptimizeOptions::hold`],
+    ///    the previous matrix itself where it still holds every sample; with
+    ///    [`OptimizeOptions::snap`], the matrix shown is put on a snapped
+    ///    texel grid (the previous matrix's image-plane directions while its
+    ///    axis is kept, else the new fit's), where that holds every sample.
     ///
     /// # Errors
     /// Only what computing the focused matrix reports (a point light inside
@@ -276,25 +335,68 @@ impl Optimizer {
         };
         report.objective_new = best.objective;
         report.median_new = self.median(samples, &best.homography);
-        let new_matrix = self.finish(samples, best.homography);
-        let (matrix, other) = match start_prev {
-            None => {
-                report.accepted = true;
-                (new_matrix, None)
-            }
+        let accepted = match start_prev {
+            None => true,
             Some(prev_candidate) => {
                 let median_prev = self.median(samples, &prev_candidate.homography);
                 report.objective_prev = Some(prev_candidate.objective);
                 report.median_prev = Some(median_prev);
-                report.accepted = report.median_new < self.options.accept_ratio * median_prev;
-                let prev_matrix = self.finish(samples, prev_candidate.homography);
-                if report.accepted {
-                    (new_matrix, Some(prev_matrix))
-                } else {
-                    (prev_matrix, Some(new_matrix))
-                }
+                let (new, old) = match self.options.accept_measure {
+                    AcceptMeasure::Median => (report.median_new, median_prev),
+                    AcceptMeasure::Objective => (best.objective, prev_candidate.objective),
+                };
+                new < self.options.accept_ratio * old
             }
         };
+        report.accepted = accepted;
+        let mut new_h = best.homography;
+        if let (true, Some(limit), Some(prev_candidate)) = (accepted, self.options.max_turn_degrees, start_prev) {
+            let axis = stable::turn_towards(prev_candidate.axis, best.axis, limit.to_radians());
+            if axis.angle_between(best.axis) > 1e-12 {
+                if let Some(turned) = self.candidate(samples, axis) {
+                    new_h = turned.homography;
+                    report.turn_limited = true;
+                }
+            }
+        }
+        let (chosen_h, other_h) = match start_prev {
+            None => (new_h, None),
+            Some(p) if accepted => (new_h, Some(p.homography)),
+            Some(p) => (p.homography, Some(new_h)),
+        };
+        let mut matrix = self.finish(samples, chosen_h);
+        // The previous matrix's homography in this frame, while its axis is kept.
+        let kept = prev.filter(|_| !accepted).and_then(|m| stable::homography_in(&frame, m));
+        // Held while the re-fit would not replace it under the same
+        // hysteresis (a camera walking in would otherwise keep a large map).
+        let refit_figure = match self.options.accept_measure {
+            AcceptMeasure::Median => report.median_prev,
+            AcceptMeasure::Objective => report.objective_prev,
+        };
+        let held = kept
+            .filter(|_| self.options.hold)
+            .filter(|h| {
+                refit_figure.is_some_and(|refit| !(refit < self.options.accept_ratio * self.figure(samples, h)))
+            })
+            .map(|h| self.finish(samples, h))
+            .filter(|m| self.holds_samples(samples, m));
+        if let Some(held) = held {
+            matrix = held;
+            report.held = true;
+        } else if let Some(snap) = self.options.snap {
+            // The grid's directions: the previous matrix's while its axis is
+            // kept, else the new fit's.
+            let reference = kept.unwrap_or(chosen_h);
+            let margin = self.options.margin_fraction.max(0.0);
+            let snapped = stable::snap(samples, &reference, chosen_h.row(2), &self.extreme, snap, margin)
+                .map(|h| self.finish(samples, h))
+                .filter(|m| self.holds_samples(samples, m));
+            if let Some(snapped) = snapped {
+                matrix = snapped;
+                report.snapped = true;
+            }
+        }
+        let other = other_h.map(|h| self.finish(samples, h));
         // The answer must hold every relevant sample (not only the extreme
         // rays it was fitted to): otherwise the other matrix, else the
         // focused one.
@@ -303,9 +405,13 @@ impl Optimizer {
         }
         if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
             report.accepted = !report.accepted;
+            report.snapped = false;
+            report.held = false;
             return Ok(Optimized { matrix: other, report });
         }
         report.fallback = Some(Fallback::NoUsableSamples);
+        report.snapped = false;
+        report.held = false;
         let mut matrix = focused;
         matrix.method = Method::Optimized;
         matrix.fallback = Some(Fallback::NoUsableSamples);
@@ -386,6 +492,17 @@ impl Optimizer {
         let texel = objective::texel_homography(&homography, samples.problem.map_size());
         let value = objective::objective(&texel, &samples.boundary);
         value.is_finite().then_some(Candidate { axis: homography.row(2), homography, objective: value })
+    }
+
+    /// The hysteresis figure ([`AcceptMeasure`]) of `homography`.
+    fn figure(&mut self, samples: &Samples, homography: &DMat3) -> f64 {
+        match self.options.accept_measure {
+            AcceptMeasure::Median => self.median(samples, homography),
+            AcceptMeasure::Objective => {
+                let texel = objective::texel_homography(homography, samples.problem.map_size());
+                objective::objective(&texel, &samples.boundary)
+            }
+        }
     }
 
     fn median(&mut self, samples: &Samples, homography: &DMat3) -> f64 {

@@ -479,7 +479,7 @@ impl Viewer {
                 None => "error: view changed, press X".to_string(),
             });
         }
-        lines.push("1-7 method K lookup [ ] map , . cadence L light".to_string());
+        lines.push("1-8 method K lookup [ ] map , . cadence L light".to_string());
         lines.push("T density G grid X error M map H hud O orbit".to_string());
         lines.push("WASD QE fly, drag look, wheel zoom, arrows light".to_string());
         lines
@@ -550,6 +550,9 @@ fn new_loop(
         }
         MethodKind::Focused | MethodKind::FocusedSpsm => {
             (LoopPolicy::Fixed(Parameterization::Focused), SearchStrategy::Paper)
+        }
+        MethodKind::FocusedSnapped | MethodKind::FocusedSnappedSpsm => {
+            (LoopPolicy::Fixed(Parameterization::FocusedSnapped(Default::default())), SearchStrategy::Paper)
         }
         MethodKind::LiSpsm | MethodKind::LiSpsmSpsm => {
             (LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())), SearchStrategy::Paper)

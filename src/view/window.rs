@@ -255,7 +255,7 @@ fn press(state: &mut WindowState, key: &Key) -> Result<(), ViewError> {
         return Ok(());
     };
     match text.to_lowercase().as_str() {
-        digit @ ("1" | "2" | "3" | "4" | "5" | "6" | "7") => {
+        digit @ ("1" | "2" | "3" | "4" | "5" | "6" | "7" | "8") => {
             let i: usize = digit.parse().unwrap_or(1);
             viewer.set_method(MethodKind::ALL[i - 1])?;
         }
