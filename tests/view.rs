@@ -83,6 +83,33 @@ fn overlays_change_the_picture() {
     assert_eq!(differing(&base, &off), 0, "overlays off restores the picture");
 }
 
+/// The boundary-samples overlay draws the optimizer's samples of the last
+/// readback where the camera sees them, and nothing for a fixed method.
+#[test]
+fn samples_overlay_shows_the_optimizers_boundary_samples() {
+    let mut c = config();
+    c.method = MethodKind::Optimized;
+    let Some(mut v) = viewer(c) else { return };
+    // A few analysis passes (every 3 frames) and their readbacks.
+    let base = v.screenshot(10, None).unwrap();
+    let samples = v.boundary_samples().first().map_or(0, Vec::len);
+    assert!(samples > 0, "no boundary samples after 10 frames");
+    v.set_overlays(Overlays { samples: true, ..Overlays::default() });
+    let shown = v.screenshot(1, None).unwrap();
+    let magenta = |img: &image::RgbaImage| img.pixels().filter(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] > 200).count();
+    let (before, after) = (magenta(&base), magenta(&shown));
+    assert!(after > before, "{samples} samples, magenta pixels {before} -> {after}");
+    // Each sample is at most one 9-pixel cross.
+    assert!(after - before <= 9 * samples, "{samples} samples, {} magenta pixels", after - before);
+    v.set_overlays(Overlays::default());
+    let off = v.screenshot(1, None).unwrap();
+    assert_eq!(magenta(&off), before, "turning the overlay off removes the crosses");
+    // A method without analysis passes has no samples to show.
+    v.set_method(MethodKind::Focused).unwrap();
+    v.screenshot(4, None).unwrap();
+    assert!(v.boundary_samples().iter().all(Vec::is_empty));
+}
+
 fn lixel_view(args: &[&str]) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_lixel"));
     c.arg("view").args(["--preset", "quick", "--screen", "96", "--map", "128"]).args(args);

@@ -223,6 +223,8 @@ pub struct Samples {
     pub(crate) focused: Result<LightMatrix>,
     pub(crate) frame: LightFrame,
     pub(crate) boundary: Vec<BoundarySample>,
+    /// World position of every boundary sample (for debug views).
+    pub(crate) boundary_world: Vec<DVec3>,
     /// `X~` of every relevant sample.
     pub(crate) relevant: Vec<DVec3>,
     /// World position of every relevant sample (the optimizer checks its
@@ -247,6 +249,7 @@ impl Samples {
             focused,
             frame,
             boundary: Vec::new(),
+            boundary_world: Vec::new(),
             relevant: Vec::new(),
             relevant_world: Vec::new(),
             depth_points,
@@ -258,6 +261,13 @@ impl Samples {
     #[must_use]
     pub fn boundary(&self) -> &[BoundarySample] {
         &self.boundary
+    }
+
+    /// World positions of the [`boundary`](Self::boundary) samples, in the
+    /// same order (for debug views: where the optimizer looked).
+    #[must_use]
+    pub fn boundary_world(&self) -> &[DVec3] {
+        &self.boundary_world
     }
 
     /// Number of relevant samples.
@@ -336,6 +346,7 @@ impl Samples {
                 d_dx: light_dir(dp_dx),
                 d_dy: light_dir(dp_dy),
             });
+            samples.boundary_world.push(p);
         }
         samples
     }
@@ -616,6 +627,7 @@ fn extract(all: &mut [Samples], bits: &[u32], grid: &Grid, options: &SampleOptio
                     continue;
                 }
                 samples.boundary.push(sample);
+                samples.boundary_world.push(world);
             }
         }
     }

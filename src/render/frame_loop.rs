@@ -105,6 +105,10 @@ pub struct LoopFrame {
     pub failed: u32,
     /// Lights whose optimization fell back, with the reason.
     pub fallbacks: Vec<(usize, Fallback)>,
+    /// World positions of the boundary samples each light was optimized
+    /// from ([`Samples::boundary_world`](crate::Samples::boundary_world));
+    /// empty when no readback arrived (or for a light whose samples failed).
+    pub boundary_samples: Vec<Vec<glam::DVec3>>,
     /// CPU time of taking the readback and optimizing.
     pub optimize_time: Duration,
     /// CPU time of solving the frame's matrices and the analysis maps.
@@ -203,10 +207,13 @@ impl ShadowLoop {
         let analyses = self.policy.analyses();
         let optimizing = Instant::now();
         let (mut optimized, mut failed, mut fallbacks) = (0u32, 0u32, Vec::new());
+        let mut boundary_samples = Vec::new();
         let readback = if analyses { renderer.try_take_analysis() } else { None };
         if let Some(r) = &readback {
             // The samples belong to the camera the pass was rendered with.
             let samples = r.samples_all(view.lights, view.bounds, view.map);
+            boundary_samples =
+                samples.iter().map(|s| s.as_ref().map(|s| s.boundary_world().to_vec()).unwrap_or_default()).collect();
             for (i, report) in self.scheduler.update_all(samples, self.frame)?.into_iter().enumerate() {
                 match report {
                     Ok(report) => {
@@ -257,7 +264,17 @@ impl ShadowLoop {
             tag: plan.focused,
         });
         let render = self.render(renderer, view, &matrices, analysis)?;
-        Ok(LoopFrame { matrices, render, readback, optimized, failed, fallbacks, optimize_time, solve_time })
+        Ok(LoopFrame {
+            matrices,
+            render,
+            readback,
+            optimized,
+            failed,
+            fallbacks,
+            boundary_samples,
+            optimize_time,
+            solve_time,
+        })
     }
 
     /// The view has as many lights as the loop was made for.

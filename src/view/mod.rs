@@ -121,11 +121,14 @@ pub struct Overlays {
     pub shadow_map: bool,
     /// The text HUD (frame time, readback latency, optimizer report, keys).
     pub hud: bool,
+    /// The boundary samples the optimizer used for the selected light (at
+    /// their world positions, from the last readback), as magenta crosses.
+    pub samples: bool,
 }
 
 impl Overlays {
     /// Parses a comma-separated list: `density`, `grid`, `error`, `map`,
-    /// `hud` (`none` for nothing).
+    /// `hud`, `samples` (`none` for nothing).
     ///
     /// # Errors
     /// [`ViewError::Config`] naming an unknown overlay.
@@ -138,10 +141,11 @@ impl Overlays {
                 "error" => o.error = true,
                 "map" => o.shadow_map = true,
                 "hud" => o.hud = true,
+                "samples" => o.samples = true,
                 "none" => {}
                 other => {
                     return Err(ViewError::Config(format!(
-                        "unknown overlay {other:?}; valid: density, grid, error, map, hud, none"
+                        "unknown overlay {other:?}; valid: density, grid, error, map, hud, samples, none"
                     )))
                 }
             }

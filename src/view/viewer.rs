@@ -47,6 +47,7 @@ struct ErrorState {
     counts: ErrorCounts,
     frame: u64,
     key: ViewKey,
+    image: image::RgbaImage,
 }
 
 /// What an error overlay depends on: the camera, the lights, the method and
@@ -83,6 +84,11 @@ pub struct Viewer {
     selected: usize,
     error_requested: bool,
     error: Option<ErrorState>,
+    /// World positions of each light's boundary samples from the last
+    /// readback the loop consumed.
+    boundary: Vec<Vec<glam::DVec3>>,
+    /// The screen overlay texture holds the samples (not only the error).
+    samples_drawn: bool,
     matrices: Vec<LightMatrix>,
     stats: FrameStats,
     last_frame: Option<Instant>,
@@ -153,6 +159,8 @@ impl Viewer {
             selected: 0,
             error_requested: config.overlays.error,
             error: None,
+            boundary: Vec::new(),
+            samples_drawn: false,
             matrices: Vec::new(),
             stats: FrameStats::default(),
             last_frame: None,
@@ -298,6 +306,7 @@ impl Viewer {
     fn restart_loop(&mut self) -> Result<(), ViewError> {
         self.shadows = new_loop(self.method, self.rig.len(), self.config.schedule, self.lookup)?;
         self.renderer.discard_analyses();
+        self.boundary.clear();
         Ok(())
     }
 
@@ -330,6 +339,7 @@ impl Viewer {
         self.stats.optimized = done.optimized;
         if done.readback.is_some() {
             self.stats.readback = done.readback;
+            self.boundary.clone_from(&done.boundary_samples);
         }
         if let Some(times) = self.renderer.try_take_gpu_times() {
             self.stats.gpu = Some(times);
@@ -343,6 +353,7 @@ impl Viewer {
             self.compute_error(&camera, &lights, key)?;
         }
         self.selected = self.selected.min(self.matrices.len().saturating_sub(1));
+        let screen_overlay = self.upload_screen_overlay(&camera);
         let map_rect = self.upload_shadow_map()?;
         let hud_rect = self.upload_hud();
         let (color, depth) = self.renderer.camera_textures().ok_or(crate::render::RenderError::NothingRendered)?;
@@ -350,12 +361,7 @@ impl Viewer {
         let mut raw = CompositeRaw::new(camera.clip_from_world().inverse().as_mat4(), light);
         let map = self.matrices.get(self.selected).map_or((1, 1), |m| (m.map_size.width, m.map_size.height));
         raw.sizes = [self.size.x as f32, self.size.y as f32, map.0 as f32, map.1 as f32];
-        raw.flags = [
-            u32::from(self.overlays.density),
-            u32::from(self.overlays.grid),
-            u32::from(self.overlays.error && self.error.is_some()),
-            0,
-        ];
+        raw.flags = [u32::from(self.overlays.density), u32::from(self.overlays.grid), u32::from(screen_overlay), 0];
         raw.map_rect = map_rect;
         raw.hud_rect = hud_rect;
         let mut encoder =
@@ -401,8 +407,49 @@ impl Viewer {
         let truth = truth::truth(caster, camera, lights);
         let (image, counts) = truth::compare(&masks, &truth, lights.len());
         self.composite.upload(Slot::Error, &image);
-        self.error = Some(ErrorState { counts, frame: self.stats.frames + 1, key });
+        self.samples_drawn = false;
+        self.error = Some(ErrorState { counts, frame: self.stats.frames + 1, key, image });
         Ok(())
+    }
+
+    /// The boundary samples of each light from the last readback the loop
+    /// consumed (world positions; empty before the first, or for methods
+    /// without analysis).
+    #[must_use]
+    pub fn boundary_samples(&self) -> &[Vec<glam::DVec3>] {
+        &self.boundary
+    }
+
+    /// Uploads the screen-sized overlay (the error picture, the boundary
+    /// samples drawn over it) when either is on; returns whether one is shown.
+    fn upload_screen_overlay(&mut self, camera: &crate::Camera) -> bool {
+        let error = self.error.as_ref().filter(|_| self.overlays.error);
+        if !self.overlays.samples {
+            if self.samples_drawn {
+                // Put the plain error picture back.
+                if let Some(e) = error {
+                    self.composite.upload(Slot::Error, &e.image);
+                }
+                self.samples_drawn = false;
+            }
+            return error.is_some();
+        }
+        let mut picture = match error {
+            Some(e) => e.image.clone(),
+            None => image::RgbaImage::new(self.size.x, self.size.y),
+        };
+        let screen_from_world = camera.screen_from_world();
+        let points = self.boundary.get(self.selected).map_or(&[][..], Vec::as_slice);
+        for &p in points {
+            let v = screen_from_world * p.extend(1.0);
+            if !(v.w > 0.0) {
+                continue;
+            }
+            draw_cross(&mut picture, v.x / v.w, v.y / v.w);
+        }
+        self.composite.upload(Slot::Error, &picture);
+        self.samples_drawn = true;
+        true
     }
 
     /// Uploads the selected light's map when that overlay is on; returns its
@@ -480,7 +527,7 @@ impl Viewer {
             });
         }
         lines.push("1-8 method K lookup [ ] map , . cadence L light".to_string());
-        lines.push("T density G grid X error M map H hud O orbit".to_string());
+        lines.push("T density G grid X error B samples M map H hud O orbit".to_string());
         lines.push("WASD QE fly, drag look, wheel zoom, arrows light".to_string());
         lines
     }
@@ -616,4 +663,21 @@ fn read_texture(
     drop(mapped);
     buffer.unmap();
     image::RgbaImage::from_raw(w, h, pixels).ok_or_else(|| ViewError::Config("screenshot size mismatch".into()))
+}
+
+/// A magenta cross (5 pixels wide) centred on screen position `(x, y)`
+/// (pixels, rows top-down as the masks); the parts off the picture are
+/// skipped.
+fn draw_cross(picture: &mut image::RgbaImage, x: f64, y: f64) {
+    if !(x.is_finite() && y.is_finite()) {
+        return;
+    }
+    let (cx, cy) = (x.floor() as i64, y.floor() as i64);
+    for d in -2..=2i64 {
+        for (px, py) in [(cx + d, cy), (cx, cy + d)] {
+            if px >= 0 && py >= 0 && px < i64::from(picture.width()) && py < i64::from(picture.height()) {
+                picture.put_pixel(px as u32, py as u32, image::Rgba([255, 0, 255, 255]));
+            }
+        }
+    }
 }

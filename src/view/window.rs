@@ -267,6 +267,7 @@ fn press(state: &mut WindowState, key: &Key) -> Result<(), ViewError> {
         "t" => overlays.density = !overlays.density,
         "g" => overlays.grid = !overlays.grid,
         "m" => overlays.shadow_map = !overlays.shadow_map,
+        "b" => overlays.samples = !overlays.samples,
         "h" => overlays.hud = !overlays.hud,
         "x" => {
             overlays.error = !overlays.error;
