@@ -39,7 +39,7 @@ pub struct ConfigRow {
     /// Summed absolute visibility error over the counted pixels, against the
     /// coverage truth (when it ran; rows written before it existed have none).
     pub visibility_error: Option<f64>,
-    /// Fallback (a stable word, see [`fallback_note`]) or error.
+    /// Fallback (a stable word, see `fallback_note`) or error.
     pub note: String,
 }
 

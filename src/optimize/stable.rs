@@ -48,7 +48,7 @@ pub enum AcceptMeasure {
 }
 
 /// Texel snapping of the optimized map's affine part
-/// (see the [module docs](self)).
+/// (see the `optimize::stable` module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct TexelSnap {

@@ -9,8 +9,8 @@
 //!
 //! wgpu's default reaction to a validation or out-of-memory error is a
 //! panic. The renderer instead wraps resource and pipeline creation and each
-//! frame in error scopes ([`capture`]) and installs an uncaptured-error
-//! handler ([`DeviceErrors`]) as a backstop, so such errors come back as
+//! frame in error scopes (`capture`) and installs an uncaptured-error
+//! handler (`DeviceErrors`) as a backstop, so such errors come back as
 //! [`RenderError::Device`] naming the backend, the adapter and the pass.
 
 use std::sync::{Arc, Mutex};
