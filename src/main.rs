@@ -70,19 +70,8 @@ struct ExperimentArgs {
     /// Light kind.
     #[arg(long, value_enum)]
     light: Option<LightKind>,
-    /// A scene file (.obj, .gltf, .glb) instead of the built-in scene; the
-    /// default camera frames it and a floor under it receives its shadows.
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// The --scene file's up axis (z: converted to the y-up world).
-    #[arg(long, value_enum, default_value = "y")]
-    up: UpAxis,
-    /// Uniform scale applied to the --scene file.
-    #[arg(long, default_value_t = 1.0)]
-    scale: f64,
-    /// No floor under the --scene model.
-    #[arg(long)]
-    no_floor: bool,
+    #[command(flatten)]
+    scene: SceneFileArgs,
     /// Triangle budget of the built-in scene.
     #[arg(long)]
     triangles: Option<usize>,
@@ -251,12 +240,37 @@ fn shard(args: &ExperimentArgs) -> Result<Option<Shard>, String> {
     }
 }
 
+/// A user's scene file and how to place it (`lixel experiment` and `lixel view`).
+#[derive(clap::Args)]
+pub(crate) struct SceneFileArgs {
+    /// A scene file (.obj, .gltf, .glb) instead of the built-in scene; the
+    /// default camera frames it and a floor under it receives its shadows.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// The --scene file's up axis (z: converted to the y-up world).
+    #[arg(long, value_enum, default_value = "y")]
+    up: UpAxis,
+    /// Uniform scale applied to the --scene file.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// No floor under the --scene model.
+    #[arg(long)]
+    no_floor: bool,
+}
+
+impl SceneFileArgs {
+    /// The scene file, if one was given.
+    pub(crate) fn source(&self) -> Option<SceneSource> {
+        let options = SceneOptions { up: self.up, scale: self.scale, floor: !self.no_floor };
+        self.scene.as_ref().map(|path| SceneSource::File { path: path.clone(), options })
+    }
+}
+
 fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> {
     let mut c = ExperimentConfig::preset(args.preset);
     c.light = args.light.unwrap_or(c.light);
-    if let Some(path) = &args.scene {
-        let options = SceneOptions { up: args.up, scale: args.scale, floor: !args.no_floor };
-        c.scene = SceneSource::File { path: path.clone(), options };
+    if let Some(scene) = args.scene.source() {
+        c.scene = scene;
     } else if let Some(t) = args.triangles {
         c.scene = SceneSource::Builtin { triangles: t };
     }

@@ -5,31 +5,21 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::DVec3;
-use lixel::experiment::{LightKind, MethodKind, Preset, SceneSource};
-use lixel::mesh::{SceneOptions, UpAxis};
+use lixel::experiment::{LightKind, MethodKind, Preset};
 use lixel::view::{self, CameraPath, Overlays, ViewConfig, Viewer, WindowOptions};
 
-use crate::{gpu, parse_vec3, BackendArg};
+use crate::{gpu, parse_vec3, BackendArg, SceneFileArgs};
 
 #[derive(clap::Args)]
 pub(crate) struct ViewArgs {
     /// Scene, camera, light positions and sizes of an experiment preset.
     #[arg(long, value_enum, default_value = "default")]
     preset: Preset,
-    /// A scene file (.obj, .gltf, .glb) instead of the built-in scene.
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// The --scene file's up axis.
-    #[arg(long, value_enum, default_value = "y")]
-    up: UpAxis,
-    /// Uniform scale applied to the --scene file.
-    #[arg(long, default_value_t = 1.0)]
-    scale: f64,
-    /// No floor under the --scene model.
-    #[arg(long)]
-    no_floor: bool,
-    /// Method of every light: normal, focused, lispsm, psm, plane-optimal,
-    /// optimized, optimized-argmin (keys 1-7 in the window).
+    #[command(flatten)]
+    scene: SceneFileArgs,
+    /// Method of every light: normal, focused, focused-snapped, lispsm, psm,
+    /// plane-optimal, optimized, optimized-argmin (keys 1-8 in the window),
+    /// each also with `+spsm`.
     #[arg(long, default_value = "optimized")]
     method: String,
     /// Number of lights (the experiment's first configurations).
@@ -79,9 +69,8 @@ pub(crate) struct ViewArgs {
 fn config(args: &ViewArgs) -> Result<ViewConfig, String> {
     let mut c = ViewConfig::preset(args.preset);
     let e = &mut c.experiment;
-    if let Some(path) = &args.scene {
-        let options = SceneOptions { up: args.up, scale: args.scale, floor: !args.no_floor };
-        e.scene = SceneSource::File { path: path.clone(), options };
+    if let Some(scene) = args.scene.source() {
+        e.scene = scene;
     }
     e.light = args.light.unwrap_or(e.light);
     e.seed = args.seed.unwrap_or(e.seed);
