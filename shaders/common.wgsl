@@ -97,6 +97,27 @@ fn in_cone(light: Light, world: vec3<f32>) -> bool {
 // bit 0) outside the view depths it owns. The cascades of one sun own
 // consecutive ranges, so exactly one of them applies per pixel; the CPU
 // twin is `lixel::cascade::Splits::choose`.
+// Where `world` falls in the light's map, for the lookups: xy the position
+// in texels (x: NDC [-1, 1] -> [0, width); y flipped, texture row 0 at the
+// top; texel k covers [k, k + 1)), z the NDC depth, w 1 — or w 0 when the
+// point is behind the light's image plane or outside the map (lit).
+fn map_position(light: Light, world: vec3<f32>) -> vec4<f32> {
+    let clip = light.clip_from_world * vec4<f32>(world, 1.0);
+    if clip.w <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let ndc = clip.xyz / clip.w;
+    if any(abs(ndc.xy) > vec2<f32>(1.0)) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size, ndc.z, 1.0);
+}
+
+// The texel holding map position `p` (clamped into the map).
+fn map_texel(light: Light, p: vec2<f32>) -> vec2<i32> {
+    return clamp(vec2<i32>(floor(p)), vec2<i32>(0), vec2<i32>(light.map_size) - vec2<i32>(1));
+}
+
 fn cascade_owns(light: Light, world: vec3<f32>) -> bool {
     if (light.flags & 1u) == 0u {
         return true;

@@ -15,21 +15,14 @@
 // Hard shadow test of `world` against the light's map. Points outside the
 // map, or behind the light's image plane, count as lit.
 fn in_shadow(light: Light, world: vec3<f32>) -> bool {
-    let clip = light.clip_from_world * vec4<f32>(world, 1.0);
-    if clip.w <= 0.0 {
+    let m = map_position(light, world);
+    if m.w == 0.0 {
         return false;
     }
-    let ndc = clip.xyz / clip.w;
-    if any(abs(ndc.xy) > vec2<f32>(1.0)) {
-        return false;
-    }
-    // NDC to texels. x: [-1, 1] -> [0, width). y: NDC y is up but texture
-    // row 0 is at the top, so flip. Texel k covers [k, k + 1); the shadow
-    // pass rasterized it at its centre k + 0.5, so `floor` picks the texel
-    // whose sample is nearest in the sense of the rasterizer's coverage.
-    let texel = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size;
-    let size = vec2<i32>(light.map_size);
-    let coords = clamp(vec2<i32>(floor(texel)), vec2<i32>(0), size - vec2<i32>(1));
+    // The shadow pass rasterized texel k at its centre k + 0.5, so `floor`
+    // picks the texel whose sample is nearest in the sense of the
+    // rasterizer's coverage.
+    let coords = map_texel(light, m.xy);
     let stored = textureLoad(shadow_maps, coords, light.layer, 0).x;
     // Linear light depth, as the shadow pass stored it (see shadow.wgsl);
     // receivers beyond the far end compare as at it.

@@ -221,18 +221,13 @@ fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool
 }
 
 fn in_shadow(light: Light, world: vec3<f32>) -> bool {
-    let clip = light.clip_from_world * vec4<f32>(world, 1.0);
-    if clip.w <= 0.0 {
+    let m = map_position(light, world);
+    if m.w == 0.0 {
         return false;
     }
-    let ndc = clip.xyz / clip.w;
-    if any(abs(ndc.xy) > vec2<f32>(1.0)) {
-        return false;
-    }
-    let p = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * light.map_size;
-    let size = vec2<i32>(light.map_size);
-    let k = clamp(vec2<i32>(floor(p)), vec2<i32>(0), size - vec2<i32>(1));
-    let zeta = ndc.z;
+    let p = m.xy;
+    let k = map_texel(light, p);
+    let zeta = m.z;
     let own = spsm_load(light, k);
     if own.kind == 2u {
         return false;
