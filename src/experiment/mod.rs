@@ -49,7 +49,7 @@ pub use coverage::{facet_reference, Coverage, VisibilityError};
 pub use identity::{Identity, RESULT_NEUTRAL_SETTINGS};
 pub use images::error_overlay;
 pub use merge::{merge, MergeOptions};
-pub use method::MethodSpec;
+pub use method::{MethodSpec, Search};
 pub use report::{markdown, MethodSummary, Summary};
 pub use rows::ConfigRow;
 pub use rundir::{report_dir, write_atomic};
