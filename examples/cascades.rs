@@ -7,25 +7,23 @@
 //!     [--preset large|default] [--suns 6] [--triangles 300000] [--picture cascades.png]
 //! ```
 //!
-//! Methods: `focused` and `lispsm` (one map of `(s·√K)²`); `csm` (practical
-//! λ = 0.75 splits of the camera range within the scene, focused maps);
-//! `sdsm` (log splits inside the visible depth range of a readback, focused
-//! maps); `sdsm-lispsm` (same splits, LiSPSM maps); `optimized-cascades`
-//! (same splits, each cascade scene-optimized from the analysis readback,
-//! rounds until no cascade switches, at most 8). The large preset puts the
-//! eye 1.7 units above a 2000-unit floor with objects over 1500 units and a
-//! far plane of 1500.
+//! Methods: `focused` and `lispsm` (one map of `(s·√K)²`); the cascaded
+//! ones are [`ShadowLoop`] policies ([`CascadePolicy`]) settled at the view
+//! (`ShadowLoop::settle`: analysis passes until no cascade moves, at most
+//! 8): `csm` (practical λ = 0.75 splits of the camera range within the
+//! scene, texel-snapped focused maps), `sdsm` (log splits inside the visible
+//! depth range of the analysis readback, focused maps), `sdsm-lispsm` (same
+//! splits, LiSPSM maps), `optimized-cascades` (same splits, each cascade
+//! scene-optimized from the readback). The large preset puts the eye 1.7
+//! units above a 2000-unit floor with objects over 1500 units and a far
+//! plane of 1500.
 
 #[path = "support/mod.rs"]
 mod support;
 
 use glam::{DVec3, UVec2};
-use lixel::cascade::{
-    visible_depth_range, CascadeOptimizer, CascadeProblems, CascadeSplits, SplitScheme, SplitTracker,
-};
 use lixel::mesh::{ProceduralScene, RayCaster, Scene, ShadowMasks};
-use lixel::optimize::{OptimizeOptions, Readback, SampleOptions};
-use lixel::render::{AnalysisRequest, Frame, Renderer, RendererOptions};
+use lixel::render::{CascadePolicy, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop};
 use lixel::{Camera, LightMatrix, Parameterization, ShadowMapSize, ShadowProblem};
 
 fn main() {
@@ -52,13 +50,15 @@ fn render_masks(
     renderer: &mut Renderer,
     camera: &Camera,
     matrices: &[LightMatrix],
-    splits: Option<&lixel::cascade::Splits>,
+    cascaded: bool,
 ) -> Result<ShadowMasks, String> {
-    renderer.set_cascades(0, splits);
+    if !cascaded {
+        renderer.set_cascades(0, None);
+    }
     let frame = Frame { camera, lights: matrices, masks: true, analysis: None, lookup: Default::default() };
     renderer.render(&frame).map_err(|e| e.to_string())?;
     let masks = renderer.read_masks().map_err(|e| e.to_string())?;
-    Ok(if splits.is_some() { sun_masks(&masks) } else { masks })
+    Ok(if cascaded { sun_masks(&masks) } else { masks })
 }
 
 /// The last frame's picture with each pixel tinted by the cascade that
@@ -86,10 +86,6 @@ fn picture(renderer: &Renderer, path: &str) -> Result<(), String> {
         }
     }
     image.save(path).map_err(|e| format!("{path}: {e}"))
-}
-
-fn solve_all(cascades: &CascadeProblems, p: &Parameterization) -> Result<Vec<LightMatrix>, String> {
-    cascades.solve(p).into_iter().collect::<Result<_, _>>().map_err(|e| e.to_string())
 }
 
 fn run() -> Result<(), String> {
@@ -140,87 +136,35 @@ fn run() -> Result<(), String> {
         let truth = caster.trace_masks(&camera, &[light], size, size);
         truth_shadowed += truth.shadowed_count(0);
         let one = ShadowProblem::new(camera, light, scene.bounds(), single).map_err(|e| e.to_string())?;
-        let problem = ShadowProblem::new(camera, light, scene.bounds(), cascade_map).map_err(|e| e.to_string())?;
         let mut counts = Vec::new();
         for p in [Parameterization::Focused, Parameterization::LiSpsm(Default::default())] {
             let m = one.solve(&p).map_err(|e| e.to_string())?;
-            counts.push(render_masks(&mut renderer, &camera, &[m], None)?.misclassified(&truth, 0).unwrap_or(0));
+            counts.push(render_masks(&mut renderer, &camera, &[m], false)?.misclassified(&truth, 0).unwrap_or(0));
         }
-        // csm: fixed practical splits.
-        let csm = CascadeSplits { count: k, scheme: SplitScheme::Practical { lambda: 0.75 }, overlap: 0.1 };
-        let fixed = CascadeProblems::new(&problem, csm.for_problem(&problem).map_err(|e| e.to_string())?)
-            .map_err(|e| e.to_string())?;
-        let m = solve_all(&fixed, &Parameterization::Focused)?;
-        counts.push(
-            render_masks(&mut renderer, &camera, &m, Some(fixed.splits()))?.misclassified(&truth, 0).unwrap_or(0),
-        );
-        // sdsm: the visible depth range of a first frame's readback (here the
-        // csm frame's full-resolution depth).
-        let depth_frame = render_masks(&mut renderer, &camera, &m, Some(fixed.splits()))?;
-        if let (0, Some(path)) = (s, args.value("--picture")) {
-            picture(&renderer, path)?;
-        }
-        let bits = vec![0u32; depth_frame.depth.len()];
-        let rb = Readback {
-            width: size,
-            height: size,
-            depth: &depth_frame.depth,
-            shadow_bits: &bits,
-            normals: None,
-            layout: Default::default(),
-        };
-        let visible = visible_depth_range(&camera, &rb).map_err(|e| e.to_string())?;
-        let sdsm_policy = CascadeSplits { count: k, scheme: SplitScheme::Logarithmic, overlap: 0.1 };
-        let mut tracker = SplitTracker::new(sdsm_policy, 0.05).map_err(|e| e.to_string())?;
-        let splits = tracker.update(&problem, visible).map_err(|e| e.to_string())?.clone();
-        let sdsm = CascadeProblems::new(&problem, splits.clone()).map_err(|e| e.to_string())?;
-        for p in [Parameterization::Focused, Parameterization::LiSpsm(Default::default())] {
-            let m = solve_all(&sdsm, &p)?;
-            counts.push(render_masks(&mut renderer, &camera, &m, Some(&splits))?.misclassified(&truth, 0).unwrap_or(0));
-        }
-        // optimized-cascades: rounds of analysis readback -> per-cascade optimization.
-        let mut matrices = solve_all(&sdsm, &Parameterization::Focused)?;
-        let mut optimizer = CascadeOptimizer::new(k, &OptimizeOptions::default());
-        renderer.set_cascades(0, Some(&splits));
-        for _round in 0..8 {
-            renderer.discard_analyses();
-            let frame = Frame {
-                camera: &camera,
-                lights: &matrices,
-                masks: false,
-                analysis: Some(AnalysisRequest::default()),
-                lookup: Default::default(),
-            };
-            let report = renderer.render(&frame).map_err(|e| e.to_string())?;
-            renderer.wait_for(&report.submission).map_err(|e| e.to_string())?;
-            let Some(readback) = renderer.try_take_analysis() else { break };
-            let m = &readback.masks;
-            let bits: Vec<u32> =
-                (0..m.depth.len()).map(|i| u32::from(m.visible(i) && (m.facing[i] == 0 || m.shadow[i] != 0))).collect();
-            let input = Readback {
-                width: m.width,
-                height: m.height,
-                depth: &m.depth,
-                shadow_bits: &bits,
-                normals: Some(&readback.normals),
-                layout: Default::default(),
-            };
-            let samples =
-                CascadeOptimizer::samples(&sdsm, &input, 0, &SampleOptions::default()).map_err(|e| e.to_string())?;
-            let results = optimizer.optimize(&samples).map_err(|e| e.to_string())?;
-            let mut switched = false;
-            for (c, r) in results.into_iter().enumerate() {
-                let r = r.map_err(|e| e.to_string())?;
-                switched |= r.matrix != matrices[c];
-                matrices[c] = r.matrix;
+        // The cascaded methods, each driven by the frame loop at this view
+        // until it settles.
+        let policies = [
+            CascadePolicy::csm(k),
+            CascadePolicy::sdsm(k, Parameterization::Focused),
+            CascadePolicy::sdsm(k, Parameterization::LiSpsm(Default::default())),
+            CascadePolicy::optimized(k),
+        ];
+        let mut last_splits = None;
+        for (i, policy) in policies.into_iter().enumerate() {
+            let mut shadows =
+                ShadowLoop::new(LoopPolicy::Cascaded(policy), 1, LoopOptions::default()).map_err(|e| e.to_string())?;
+            let view = LoopView { camera: &camera, lights: &[light], bounds: scene.bounds(), map: cascade_map };
+            let settled = shadows.settle(&mut renderer, &view, 8).map_err(|e| e.to_string())?;
+            // The loop left the renderer's cascades set for these matrices.
+            counts.push(
+                render_masks(&mut renderer, &camera, &settled.matrices, true)?.misclassified(&truth, 0).unwrap_or(0),
+            );
+            if let (0, 0, Some(path)) = (s, i, args.value("--picture")) {
+                picture(&renderer, path)?;
             }
-            if !switched {
-                break;
-            }
+            last_splits = shadows.frame(&mut renderer, &view).map_err(|e| e.to_string())?.splits;
         }
-        counts.push(
-            render_masks(&mut renderer, &camera, &matrices, Some(&splits))?.misclassified(&truth, 0).unwrap_or(0),
-        );
+        let splits = last_splits.ok_or("no splits")?;
         eprintln!("sun {s} {:?}: splits {:?}: {counts:?}", light, splits.boundaries());
         for (t, c) in totals.iter_mut().zip(&counts) {
             *t += c;

@@ -91,3 +91,110 @@ fn each_pixel_uses_the_cascade_the_cpu_chooses() {
     eprintln!("misclassified: 4 cascades of 256² {cascaded}, one focused 256² {focused}");
     assert!(cascaded <= focused, "cascades {cascaded} vs one focused map {focused}");
 }
+
+/// The camera and sun of the loop tests: a low eye over the tiny scene.
+fn loop_view(size: u32) -> (Camera, Light) {
+    let camera = Camera::look_at(
+        DVec3::new(-30.0, 2.5, 30.0),
+        DVec3::new(10.0, 0.0, -10.0),
+        DVec3::Y,
+        60f64.to_radians(),
+        UVec2::splat(size),
+        0.2,
+        150.0,
+    )
+    .unwrap();
+    (camera, Light::directional(DVec3::new(0.5, -1.0, 0.3)))
+}
+
+/// Misclassified pixels of the sun (its cascades' bits OR-ed) rendered with
+/// `matrices` as the renderer's cascades stand.
+fn sun_misclassified(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    matrices: &[lixel::LightMatrix],
+    truth: &lixel::mesh::ShadowMasks,
+) -> u64 {
+    renderer
+        .render(&Frame { camera, lights: matrices, masks: true, analysis: None, lookup: Default::default() })
+        .unwrap();
+    let mut masks = renderer.read_masks().unwrap();
+    for (s, f) in masks.shadow.iter_mut().zip(masks.facing.iter_mut()) {
+        *s = u32::from(*s != 0);
+        *f = u32::from(*f != 0);
+    }
+    masks.misclassified(truth, 0).unwrap()
+}
+
+#[test]
+fn the_frame_loop_drives_cascades() {
+    use lixel::render::{CascadePolicy, LoopOptions, LoopPolicy, LoopView, ShadowLoop};
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let size = 96;
+    let (camera, sun) = loop_view(size);
+    let map = ShadowMapSize::square(128);
+    let lights = [sun, Light::point(DVec3::new(0.0, 60.0, 0.0))];
+    let view = LoopView { camera: &camera, lights: &lights, bounds: scene.bounds(), map };
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &[sun], size, size);
+    let problem = ShadowProblem::new(camera, sun, scene.bounds(), map).unwrap();
+
+    // csm: fixed practical splits, snapped focused cascades, exactly the
+    // solver's; the point light keeps one map after the sun's four.
+    let csm = CascadePolicy::csm(4);
+    let mut shadows = ShadowLoop::new(LoopPolicy::Cascaded(csm.clone()), 2, LoopOptions::default()).unwrap();
+    let done = shadows.frame(&mut renderer, &view).unwrap();
+    let splits = done.splits.clone().unwrap();
+    assert_eq!(splits, csm.splits.for_problem(&problem).unwrap());
+    let expected: Vec<_> = CascadeProblems::new(&problem, splits.clone())
+        .unwrap()
+        .solve(&Parameterization::FocusedSnapped(Default::default()))
+        .into_iter()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(done.matrices.len(), 5);
+    assert_eq!(&done.matrices[..4], &expected[..]);
+    assert!(done.readback.is_none(), "csm runs no analysis");
+    let csm_errors = sun_misclassified(&mut renderer, &camera, &done.matrices, &truth);
+
+    // sdsm: the splits move inside the visible depth range of the readback.
+    let sdsm = CascadePolicy::sdsm(4, Parameterization::Focused);
+    let mut shadows = ShadowLoop::new(LoopPolicy::Cascaded(sdsm), 2, LoopOptions::default()).unwrap();
+    let settled = shadows.settle(&mut renderer, &view, 4).unwrap();
+    assert_eq!(settled.frames, 2, "one frame to read back, one to place the splits");
+    let full = splits.clone();
+    let sdsm_splits = shadows.frame(&mut renderer, &view).unwrap().splits.unwrap();
+    let depths: Vec<f64> = {
+        renderer.set_cascades(0, None);
+        let one = [problem.solve(&Parameterization::Focused).unwrap()];
+        renderer
+            .render(&Frame { camera: &camera, lights: &one, masks: true, analysis: None, lookup: Default::default() })
+            .unwrap();
+        let masks = renderer.read_masks().unwrap();
+        let world_from_screen = camera.screen_from_world().inverse();
+        (0..masks.depth.len())
+            .filter(|&i| masks.visible(i))
+            .map(|i| {
+                let (x, y) = ((i as u32 % size) as f64 + 0.5, (i as u32 / size) as f64 + 0.5);
+                camera.view_depth(world_from_screen.project_point3(DVec3::new(x, y, f64::from(masks.depth[i]))))
+            })
+            .collect()
+    };
+    let (lo, hi) = depths.iter().fold((f64::MAX, 0f64), |(lo, hi), &d| (lo.min(d), hi.max(d)));
+    eprintln!("visible {lo}..{hi}; csm {:?}; sdsm {:?}", full.boundaries(), sdsm_splits.boundaries());
+    // The analysis pass is coarser than the check's pixels: 2% slack.
+    assert!(sdsm_splits.near() <= lo * 1.02 && sdsm_splits.far() >= hi * 0.98, "{sdsm_splits:?} vs {lo}..{hi}");
+    assert!(sdsm_splits.near() > full.near() * 2.0, "{sdsm_splits:?} vs {full:?}");
+
+    // optimized-cascades: every cascade optimized from the readback; the
+    // result holds its own against csm on the sun's shadow.
+    let mut shadows =
+        ShadowLoop::new(LoopPolicy::Cascaded(CascadePolicy::optimized(4)), 2, LoopOptions::default()).unwrap();
+    let settled = shadows.settle(&mut renderer, &view, 6).unwrap();
+    assert!(settled.frames >= 2 && settled.frames <= 7, "{settled:?}");
+    let done = shadows.frame(&mut renderer, &view).unwrap();
+    let optimized_errors = sun_misclassified(&mut renderer, &camera, &done.matrices, &truth);
+    eprintln!("misclassified: csm {csm_errors}, optimized cascades {optimized_errors} (settled in {})", settled.frames);
+    assert!(optimized_errors <= csm_errors * 3 / 2 + 20, "optimized {optimized_errors} vs csm {csm_errors}");
+}

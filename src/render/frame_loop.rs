@@ -13,7 +13,9 @@
 
 use std::time::{Duration, Instant};
 
+use super::cascade_loop::{CascadePolicy, CascadeState, CascadeUpdate};
 use super::{AnalysisRequest, Frame, FrameReport, ReadbackLatency, RenderError, Renderer, ShadowLookup};
+use crate::cascade::Splits;
 use crate::optimize::{OptimizeOptions, Optimizer, ScheduleOptions, ShadowScheduler};
 use crate::ShadowProblem;
 use crate::{Camera, Fallback, Light, LightMatrix, LixelError, Parameterization, SceneBounds, ShadowMapSize};
@@ -33,13 +35,24 @@ pub enum LoopPolicy {
     /// optimizations of [`Optimized`](Self::Optimized) run and are thrown
     /// away: the machinery's own cost, for timing.
     FixedWithAnalysis(Parameterization),
+    /// Cascaded suns: every directional light split into
+    /// [`CascadePolicy::splits`] cascades, one map slot each (so
+    /// [`LoopFrame::matrices`] holds one matrix per slot), with fixed or
+    /// SDSM splits and fixed or scene-optimized cascade matrices; analysis
+    /// passes every [`ScheduleOptions::optimize_every`] frames when the
+    /// policy needs them. See [`cascade_loop`](super::cascade_loop).
+    Cascaded(CascadePolicy),
 }
 
 impl LoopPolicy {
     /// Whether the loop runs analysis passes and the optimizer.
     #[must_use]
     pub fn analyses(&self) -> bool {
-        !matches!(self, Self::Fixed(_))
+        match self {
+            Self::Fixed(_) => false,
+            Self::Cascaded(c) => c.analyses(),
+            Self::Optimized | Self::FixedWithAnalysis(_) => true,
+        }
     }
 }
 
@@ -92,8 +105,12 @@ pub struct ReadbackInfo {
 /// What [`ShadowLoop::frame`] did.
 #[derive(Clone, Debug)]
 pub struct LoopFrame {
-    /// The matrices rendered, one per light.
+    /// The matrices rendered, one per light (one per map slot for
+    /// [`LoopPolicy::Cascaded`]: a sun's cascades are consecutive).
     pub matrices: Vec<LightMatrix>,
+    /// The suns' cascade splits of the frame ([`LoopPolicy::Cascaded`]
+    /// with a directional light; `None` otherwise).
+    pub splits: Option<Splits>,
     /// The renderer's report of the frame.
     pub render: FrameReport,
     /// The readback consumed at the start of the frame, if one had arrived.
@@ -109,6 +126,9 @@ pub struct LoopFrame {
     /// from ([`Samples::boundary_world`](crate::Samples::boundary_world));
     /// empty when no readback arrived (or for a light whose samples failed).
     pub boundary_samples: Vec<Vec<glam::DVec3>>,
+    /// Whether some light's (or cascade's) optimizer accepted a new matrix
+    /// from the readback (no fallback).
+    pub moved: bool,
     /// CPU time of taking the readback and optimizing.
     pub optimize_time: Duration,
     /// CPU time of solving the frame's matrices and the analysis maps.
@@ -159,6 +179,9 @@ pub struct ShadowLoop {
     policy: LoopPolicy,
     lookup: ShadowLookup,
     scheduler: ShadowScheduler,
+    /// The cascade state of [`LoopPolicy::Cascaded`].
+    cascades: Option<CascadeState>,
+    optimize_every: u32,
     frame: u64,
 }
 
@@ -167,10 +190,16 @@ impl ShadowLoop {
     ///
     /// # Errors
     /// [`LixelError::UnusableSamples`] for more than 32 lights or a zero
-    /// cadence (see [`ShadowScheduler::new`]).
+    /// cadence (see [`ShadowScheduler::new`]); [`LixelError::InvalidCascades`]
+    /// for an invalid cascade policy.
     pub fn new(policy: LoopPolicy, light_count: usize, options: LoopOptions) -> Result<Self, LixelError> {
+        let cascades = match &policy {
+            LoopPolicy::Cascaded(c) => Some(CascadeState::new(c, light_count, options.optimize.clone())?),
+            _ => None,
+        };
+        let optimize_every = options.schedule.optimize_every;
         let scheduler = ShadowScheduler::new(light_count, options.schedule, Optimizer::new(options.optimize))?;
-        Ok(Self { policy, lookup: options.lookup, scheduler, frame: 0 })
+        Ok(Self { policy, lookup: options.lookup, scheduler, cascades, optimize_every, frame: 0 })
     }
 
     /// The policy.
@@ -204,9 +233,13 @@ impl ShadowLoop {
     /// ([`LoopFrame::failed`]).
     pub fn frame(&mut self, renderer: &mut Renderer, view: &LoopView<'_>) -> Result<LoopFrame, LoopError> {
         self.check_lights(view)?;
+        if let LoopPolicy::Cascaded(policy) = &self.policy {
+            let policy = policy.clone();
+            return self.cascade_frame(&policy, renderer, view, false);
+        }
         let analyses = self.policy.analyses();
         let optimizing = Instant::now();
-        let (mut optimized, mut failed, mut fallbacks) = (0u32, 0u32, Vec::new());
+        let (mut optimized, mut failed, mut fallbacks, mut moved) = (0u32, 0u32, Vec::new(), false);
         let mut boundary_samples = Vec::new();
         let readback = if analyses { renderer.try_take_analysis() } else { None };
         if let Some(r) = &readback {
@@ -218,6 +251,7 @@ impl ShadowLoop {
                 match report {
                     Ok(report) => {
                         optimized |= 1 << i;
+                        moved |= report.accepted && report.fallback.is_none();
                         fallbacks.extend(report.fallback.map(|f| (i, f)));
                     }
                     Err(_) => failed |= 1 << i,
@@ -231,7 +265,8 @@ impl ShadowLoop {
         let solving = Instant::now();
         let matrices = match &self.policy {
             LoopPolicy::Fixed(how) | LoopPolicy::FixedWithAnalysis(how) => view.solve(view.map, how)?,
-            LoopPolicy::Optimized => {
+            // (Cascaded frames are cascade_frame's.)
+            LoopPolicy::Optimized | LoopPolicy::Cascaded(_) => {
                 // Focused until the optimizer has reached a light.
                 let mut matrices = Vec::with_capacity(view.lights.len());
                 for (i, &light) in view.lights.iter().enumerate() {
@@ -266,12 +301,53 @@ impl ShadowLoop {
         let render = self.render(renderer, view, &matrices, analysis)?;
         Ok(LoopFrame {
             matrices,
+            splits: None,
             render,
             readback,
             optimized,
             failed,
             fallbacks,
             boundary_samples,
+            moved,
+            optimize_time,
+            solve_time,
+        })
+    }
+
+    /// [`frame`](Self::frame) for [`LoopPolicy::Cascaded`].
+    fn cascade_frame(
+        &mut self,
+        policy: &CascadePolicy,
+        renderer: &mut Renderer,
+        view: &LoopView<'_>,
+        force_analysis: bool,
+    ) -> Result<LoopFrame, LoopError> {
+        let state = self.cascades.as_mut().ok_or(LixelError::InvalidCascades { reason: "no cascade state" })?;
+        let analyses = policy.analyses();
+        let optimizing = Instant::now();
+        let readback = if analyses { renderer.try_take_analysis() } else { None };
+        let update = match &readback {
+            Some(r) => state.take_readback(policy, r, view)?,
+            None => CascadeUpdate::default(),
+        };
+        let readback = readback.map(|r| ReadbackInfo { frame: r.frame, latency: r.latency, focused: r.tag });
+        let optimize_time = if analyses { optimizing.elapsed() } else { Duration::ZERO };
+        let solving = Instant::now();
+        let (matrices, splits) = state.solve(policy, renderer, view)?;
+        let solve_time = solving.elapsed();
+        let analysis = (analyses && (force_analysis || self.frame % u64::from(self.optimize_every) == 0))
+            .then_some(AnalysisRequest { lights: None, tag: 0 });
+        let render = self.render(renderer, view, &matrices, analysis)?;
+        Ok(LoopFrame {
+            matrices,
+            splits,
+            render,
+            readback,
+            optimized: update.optimized,
+            failed: update.failed,
+            fallbacks: update.fallbacks,
+            boundary_samples: update.boundary_samples,
+            moved: update.moved,
             optimize_time,
             solve_time,
         })
@@ -305,7 +381,10 @@ impl ShadowLoop {
     /// current matrices in their own maps, waits for its readback and
     /// optimizes every light; it stops when no light's optimizer moved its
     /// matrix any more (no 20% median improvement) or one fell back, or
-    /// after `max_frames`. Blocks; the policy does not matter.
+    /// after `max_frames`. Blocks; the policy does not matter, except
+    /// [`LoopPolicy::Cascaded`]: its frames (one analysis pass each, waited
+    /// for) run until a readback moved no cascade (at once for a policy
+    /// without analysis), and [`Settled::matrices`] holds one per map slot.
     ///
     /// # Errors
     /// Renderer failures, and a light whose matrix cannot be solved or whose
@@ -317,6 +396,10 @@ impl ShadowLoop {
         max_frames: usize,
     ) -> Result<Settled, LoopError> {
         self.check_lights(view)?;
+        if let LoopPolicy::Cascaded(policy) = &self.policy {
+            let policy = policy.clone();
+            return self.settle_cascades(&policy, renderer, view, max_frames);
+        }
         for (i, m) in view.solve(view.map, &Parameterization::Focused)?.into_iter().enumerate() {
             self.scheduler.set_matrix(i, m);
         }
@@ -349,5 +432,32 @@ impl ShadowLoop {
         }
         let fallbacks = vec![None; view.lights.len()];
         Ok(Settled { matrices: current(&self.scheduler), frames: max_frames, fallbacks })
+    }
+
+    /// [`settle`](Self::settle) for [`LoopPolicy::Cascaded`].
+    fn settle_cascades(
+        &mut self,
+        policy: &CascadePolicy,
+        renderer: &mut Renderer,
+        view: &LoopView<'_>,
+        max_frames: usize,
+    ) -> Result<Settled, LoopError> {
+        renderer.discard_analyses();
+        let mut frames = 0;
+        loop {
+            frames += 1;
+            let done = self.cascade_frame(policy, renderer, view, true)?;
+            renderer.wait_for(&done.render.submission)?;
+            renderer.wait_idle()?;
+            let settled = !policy.analyses() || (done.readback.is_some() && !done.moved);
+            // One more frame than analyses: the last readback is consumed.
+            if settled || frames > max_frames.max(1) {
+                let mut fallbacks = vec![None; view.lights.len()];
+                for (i, f) in done.fallbacks {
+                    fallbacks[i] = Some(f);
+                }
+                return Ok(Settled { matrices: done.matrices, frames, fallbacks });
+            }
+        }
     }
 }

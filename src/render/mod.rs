@@ -35,6 +35,7 @@
 //! [`Renderer::optional_features`] lists the features worth requesting.
 
 mod analysis;
+mod cascade_loop;
 mod culling;
 mod depth_copy;
 pub mod device;
@@ -59,6 +60,7 @@ use crate::mesh::{MeshError, Scene};
 use crate::{Camera, LightMatrix};
 
 pub use analysis::{AnalysisMeta, AnalysisReadback};
+pub use cascade_loop::{sun_bits, CascadeMatrices, CascadePolicy, SplitPlacement};
 pub use device::Gpu;
 pub use frame_loop::{LoopError, LoopFrame, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Settled, ShadowLoop};
 pub use lookup::ShadowLookup;
