@@ -33,14 +33,18 @@ struct Light {
     // layer of the shadow-map array (layers are as large as the largest map).
     map_size: vec2<f32>,
     layer: u32,
-    // Bit 0: a cascade, looked up only at view depths [depth.z, depth.w).
+    // Bit 0: a cascade (`cascade_weight`, `cascade_owns`).
     flags: u32,
     // Linear light depth: (min distance, 1 / (max - min), ..); see
-    // shadow.wgsl. zw: a cascade's view-depth range (flags bit 0).
+    // shadow.wgsl. zw: the view depths [z, w) where a cascade owns the
+    // mask bits (flags bit 0).
     depth: vec4<f32>,
     // A spot light's cone: (unit axis, cos of the half-angle); w < -1 for
     // lights without one.
     spot: vec4<f32>,
+    // A cascade's weight over view depth: 0 before x, rising to 1 at y, 1
+    // to z, falling to 0 at w (flags bit 0).
+    cascade: vec4<f32>,
 }
 
 struct Lights {
@@ -93,10 +97,6 @@ fn in_cone(light: Light, world: vec3<f32>) -> bool {
     return light.spot.w < -1.0 || dot(light.spot.xyz, to_world) >= light.spot.w * length(to_world);
 }
 
-// Whether `light` applies at `world`: always, except for a cascade (flags
-// bit 0) outside the view depths it owns. The cascades of one sun own
-// consecutive ranges, so exactly one of them applies per pixel; the CPU
-// twin is `lixel::cascade::Splits::choose`.
 // Where `world` falls in the light's map, for the lookups: xy the position
 // in texels (x: NDC [-1, 1] -> [0, width); y flipped, texture row 0 at the
 // top; texel k covers [k, k + 1)), z the NDC depth, w 1 — or w 0 when the
@@ -118,12 +118,39 @@ fn map_texel(light: Light, p: vec2<f32>) -> vec2<i32> {
     return clamp(vec2<i32>(floor(p)), vec2<i32>(0), vec2<i32>(light.map_size) - vec2<i32>(1));
 }
 
+// Whether `light` sets its mask bits at `world`: always, except for a
+// cascade (flags bit 0) outside the view depths it owns. The cascades of one
+// sun own consecutive ranges split at the middle of each blend band, so
+// exactly one of them sets bits per pixel; the CPU twin is
+// `lixel::cascade::CascadeChoice::bit_owner`.
 fn cascade_owns(light: Light, world: vec3<f32>) -> bool {
     if (light.flags & 1u) == 0u {
         return true;
     }
     let d = dot(camera.view_depth, vec4<f32>(world, 1.0));
     return d >= light.depth.z && d < light.depth.w;
+}
+
+// The weight of `light`'s lighting at `world`: 1, except for a cascade
+// (flags bit 0): 0 outside its ramps, blending linearly with its
+// neighbours across the blend bands; the weights of one sun's cascades add
+// up to 1. The CPU twin is `lixel::cascade::Splits::choose`.
+fn cascade_weight(light: Light, world: vec3<f32>) -> f32 {
+    if (light.flags & 1u) == 0u {
+        return 1.0;
+    }
+    let d = dot(camera.view_depth, vec4<f32>(world, 1.0));
+    let r = light.cascade;
+    if d < r.x || d >= r.w {
+        return 0.0;
+    }
+    if d < r.y {
+        return (d - r.x) / (r.y - r.x);
+    }
+    if d > r.z {
+        return (r.w - d) / (r.w - r.z);
+    }
+    return 1.0;
 }
 
 struct Shading {
@@ -145,16 +172,22 @@ fn shade(in: VertexOutput) -> Shading {
     let count = min(lights.count, MAX_LIGHTS);
     for (var i = 0u; i < count; i++) {
         let light = lights.items[i];
-        if !cascade_owns(light, in.world) {
+        // A cascade lights with its weight; only the cascade owning the
+        // pixel sets bits (see cascade_owns).
+        let weight = cascade_weight(light, in.world);
+        if weight <= 0.0 {
             continue;
         }
+        let owns = cascade_owns(light, in.world);
         let n_dot_l = dot(n, normalize(to_light(light, in.world)));
         if n_dot_l > 0.0 && in_cone(light, in.world) {
-            out.facing |= 1u << i;
-            if in_shadow(light, in.world) {
-                out.shadow |= 1u << i;
-            } else {
-                out.color += in.albedo * light.color.rgb * n_dot_l;
+            let shadowed = in_shadow(light, in.world);
+            if owns {
+                out.facing |= 1u << i;
+                out.shadow |= select(0u, 1u << i, shadowed);
+            }
+            if !shadowed {
+                out.color += in.albedo * light.color.rgb * (n_dot_l * weight);
             }
         }
     }

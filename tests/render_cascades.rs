@@ -9,7 +9,7 @@
 mod render_common;
 
 use glam::{DVec2, DVec3, UVec2};
-use lixel::cascade::{CascadeProblems, CascadeSplits, SplitScheme};
+use lixel::cascade::{CascadeProblems, CascadeSplits, SplitScheme, Splits};
 use lixel::mesh::RayCaster;
 use lixel::render::{Frame, Renderer, RendererOptions};
 use lixel::{Camera, Light, Parameterization, ShadowMapSize, ShadowProblem};
@@ -43,7 +43,10 @@ fn each_pixel_uses_the_cascade_the_cpu_chooses() {
     let masks = renderer.read_masks().unwrap();
 
     let world_from_screen = camera.screen_from_world().inverse();
-    let (mut checked, mut used) = (0usize, [0usize; 4]);
+    let (mut checked, mut used, mut in_band) = (0usize, [0usize; 4], 0usize);
+    let mut band_pixels = Vec::new();
+    let b = splits.boundaries();
+    let edges: Vec<f64> = b.iter().copied().chain((1..4).map(|k| b[k] - 0.5 * splits.band(k - 1))).collect();
     let mut disagree = Vec::new();
     for y in 0..size {
         for x in 0..size {
@@ -55,23 +58,90 @@ fn each_pixel_uses_the_cascade_the_cpu_chooses() {
             let world = world_from_screen.project_point3(pixel.extend(f64::from(masks.depth[i])));
             let d = camera.view_depth(world);
             let Some(choice) = splits.choose(d) else { continue };
-            // f32 shading positions: leave pixels at a boundary out.
-            if splits.boundaries().iter().any(|b| (d - b).abs() <= 1e-3 * b) {
+            // f32 shading positions: leave pixels at a boundary or the
+            // middle of a band (where the bits change hands) out.
+            if edges.iter().any(|b| (d - b).abs() <= 1e-3 * b) {
                 continue;
             }
             checked += 1;
-            used[choice.index] += 1;
-            if masks.facing[i] != 1 << choice.index || masks.shadow[i] & !masks.facing[i] != 0 {
+            let owner = choice.bit_owner();
+            used[owner] += 1;
+            in_band += usize::from(choice.blend > 0.0);
+            if masks.facing[i] != 1 << owner || masks.shadow[i] & !masks.facing[i] != 0 {
                 disagree.push(format!(
-                    "({x}, {y}) depth {d}: facing {:#b}, shadow {:#b}, cpu {}",
-                    masks.facing[i], masks.shadow[i], choice.index
+                    "({x}, {y}) depth {d}: facing {:#b}, shadow {:#b}, cpu {owner} ({choice:?})",
+                    masks.facing[i], masks.shadow[i]
                 ));
+            }
+            if choice.blend > 0.02 && choice.blend < 0.98 {
+                band_pixels.push((i, choice.blend));
             }
         }
     }
-    eprintln!("{checked} pixels checked; per cascade {used:?}; splits {:?}", splits.boundaries());
+    eprintln!(
+        "{checked} pixels checked ({in_band} in bands); per bit owner {used:?}; splits {:?}",
+        splits.boundaries()
+    );
     assert!(disagree.is_empty(), "{} of {checked} disagree: {:?}", disagree.len(), &disagree[..disagree.len().min(5)]);
     assert!(checked > 2000 && used.iter().all(|&n| n > 50), "{checked} checked, per cascade {used:?}");
+    assert!(in_band > 500, "{in_band} pixels in blend bands");
+
+    // The colour blends the two cascades' lighting across a band: it is the
+    // blend of the colours with the band given wholly to the nearer
+    // cascade and wholly to the farther one (same matrices). So that the
+    // two lookups differ often, the odd cascades belong to another sun.
+    let other = ShadowProblem::new(
+        camera,
+        Light::directional(DVec3::new(-0.6, -1.0, 0.1)),
+        scene.bounds(),
+        ShadowMapSize::square(256),
+    )
+    .unwrap();
+    let other: Vec<_> = CascadeProblems::new(&other, splits.clone())
+        .unwrap()
+        .solve(&Parameterization::Focused)
+        .into_iter()
+        .map(Result::unwrap)
+        .collect();
+    let matrices: Vec<_> = (0..4).map(|k| if k % 2 == 1 { other[k] } else { matrices[k] }).collect();
+    let blended = hard_or_blended(&mut renderer, &camera, &matrices, &splits);
+    let hard = |boundaries: Vec<f64>, renderer: &mut Renderer| {
+        hard_or_blended(renderer, &camera, &matrices, &Splits::from_boundaries(&boundaries, 0.0).unwrap())
+    };
+    let nearer = hard(b.to_vec(), &mut renderer);
+    let farther =
+        hard((0..=4).map(|k| if k == 0 || k == 4 { b[k] } else { b[k] - splits.band(k - 1) }).collect(), &mut renderer);
+    let linear = |c: u8| {
+        let c = f64::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let (mut differing, mut wrong) = (0usize, Vec::new());
+    for &(i, w) in &band_pixels {
+        let (x, y) = (i as u32 % size, i as u32 / size);
+        let (a, n, f) = (blended.get_pixel(x, y).0, nearer.get_pixel(x, y).0, farther.get_pixel(x, y).0);
+        differing += usize::from(n != f);
+        for c in 0..3 {
+            let expected = (1.0 - w) * linear(n[c]) + w * linear(f[c]);
+            if (linear(a[c]) - expected).abs() > 0.01 + 0.02 * expected {
+                wrong.push(format!("({x}, {y}) blend {w:.3}: {a:?} vs nearer {n:?}, farther {f:?}"));
+                break;
+            }
+        }
+    }
+    eprintln!("{} band pixels, {differing} where the cascades' colours differ", band_pixels.len());
+    assert!(
+        wrong.is_empty(),
+        "{} of {} band pixels: {:?}",
+        wrong.len(),
+        band_pixels.len(),
+        &wrong[..wrong.len().min(5)]
+    );
+    assert!(differing > 10, "only {differing} band pixels where the cascades differ: the check checks little");
+    renderer.set_cascades(0, Some(&splits));
 
     // The sun's bit is the OR of its cascades'; it agrees with ray-cast
     // truth about as well as one focused map of the same size.
@@ -90,6 +160,20 @@ fn each_pixel_uses_the_cascade_the_cpu_chooses() {
     let focused = renderer.read_masks().unwrap().misclassified(&truth, 0).unwrap();
     eprintln!("misclassified: 4 cascades of 256² {cascaded}, one focused 256² {focused}");
     assert!(cascaded <= focused, "cascades {cascaded} vs one focused map {focused}");
+}
+
+/// The colour of a frame whose lights are the cascades of `splits`.
+fn hard_or_blended(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    matrices: &[lixel::LightMatrix],
+    splits: &Splits,
+) -> image::RgbaImage {
+    renderer.set_cascades(0, Some(splits));
+    renderer
+        .render(&Frame { camera, lights: matrices, masks: false, analysis: None, lookup: Default::default() })
+        .unwrap();
+    renderer.read_color().unwrap()
 }
 
 /// The camera and sun of the loop tests: a low eye over the tiny scene.

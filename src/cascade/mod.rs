@@ -191,6 +191,22 @@ pub struct CascadeChoice {
     pub blend: f64,
 }
 
+impl CascadeChoice {
+    /// The cascade whose lookup gives a pixel's binary shadow bit: `index`,
+    /// or `index + 1` from the middle of the blend band on (`blend >=
+    /// 0.5`). With two lookups blended by weight, this is the blended
+    /// visibility rounded, ties going to the farther cascade. The renderer's
+    /// mask bits follow it (`render::Renderer::set_cascades`).
+    #[must_use]
+    pub fn bit_owner(&self) -> usize {
+        if self.blend >= 0.5 {
+            self.index + 1
+        } else {
+            self.index
+        }
+    }
+}
+
 impl Splits {
     /// Splits from explicit boundaries (strictly increasing, finite, at
     /// least two) and an overlap fraction (as [`CascadeSplits::overlap`]).
@@ -257,7 +273,7 @@ impl Splits {
     /// the weight of cascade `k + 1` in the blend band, rising linearly from
     /// 0 at `b_(k+1) - band(k)` towards 1 at `b_(k+1)`. `None` outside
     /// `[near, far]` or for a non-finite depth. The renderer implements the
-    /// same choice, without the blend (`render::Renderer::set_cascades`,
+    /// same choice (`render::Renderer::set_cascades`, `cascade_weight` and
     /// `cascade_owns` in `shaders/common.wgsl`; `tests/render_cascades.rs`
     /// checks that they agree).
     #[must_use]

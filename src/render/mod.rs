@@ -78,6 +78,17 @@ use timing::GpuTimer;
 use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw};
 
 /// The next `f32` above a finite `x`.
+/// Light slot of a cascade ([`Renderer::set_cascades`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CascadeSlot {
+    /// View depths where its mask bits apply, `[start, end)`.
+    pub(crate) owned: (f32, f32),
+    /// Weight ramps: (fade-in start, fade-in end, fade-out start, fade-out end).
+    pub(crate) ramps: [f32; 4],
+    /// The sun's first cascade.
+    pub(crate) first: bool,
+}
+
 fn next_f32_up(x: f32) -> f32 {
     if x == 0.0 {
         f32::from_bits(1)
@@ -292,9 +303,9 @@ pub struct Renderer {
     last_lights: Vec<LightMatrix>,
     /// The lookup mode of the last frame (index into `lookups`).
     last_lookup: Option<usize>,
-    /// Light `i` is a cascade owning view depths `depth_ranges[i]`
+    /// Light `i` is a cascade when `cascades[i]` is set
     /// ([`Renderer::set_cascades`]).
-    depth_ranges: Vec<Option<(f32, f32)>>,
+    cascades: Vec<Option<CascadeSlot>>,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -435,7 +446,7 @@ impl Renderer {
             frame: 0,
             last_lights: Vec::new(),
             last_lookup: None,
-            depth_ranges: Vec::new(),
+            cascades: Vec::new(),
             options,
             errors,
             depth_copy: std::sync::OnceLock::new(),
@@ -445,22 +456,46 @@ impl Renderer {
     }
 
     /// Makes lights cascades from the next frame on: light `first + k` is
-    /// cascade `k` of `splits` and is looked up (shadow bit, facing bit and
-    /// light) only where the pixel's view depth lies in the range cascade
-    /// `k` owns, `[b_k, b_(k+1))` (the last includes the far end): the
-    /// per-pixel choice of [`Splits::choose`](crate::cascade::Splits::choose),
-    /// without blending. Frame `lights` hold the cascades' matrices at those
-    /// indices; the sun's shadow bit is the OR of the cascades' bits (at most
-    /// one is set per pixel). Other lights are unaffected; `None` for a
-    /// `splits` clears the lights from `first` on.
+    /// cascade `k` of `splits`. Frame `lights` hold the cascades' matrices
+    /// at those indices. Per pixel at view depth `d`, as
+    /// [`Splits::choose`](crate::cascade::Splits::choose) says:
+    ///
+    /// - colour: cascade `k` lights with weight `1 - blend` and, inside the
+    ///   blend band at its end, cascade `k + 1` with weight `blend` (the
+    ///   visibility of the two lookups blended);
+    /// - masks (shadow and facing bits, camera and analysis passes): only
+    ///   the cascade of [`CascadeChoice::bit_owner`](crate::cascade::CascadeChoice::bit_owner)
+    ///   sets its bits — `k`, or `k + 1` from the middle of the band on —
+    ///   so the bit is the blended visibility rounded (ties to `k + 1`), at
+    ///   most one bit per sun is set, and the sun's bit is the OR of its
+    ///   cascades' bits.
+    ///
+    /// A cascaded sun counts as one light in the split of light intensity.
+    /// Other lights are unaffected; `None` for a `splits` clears the lights
+    /// from `first` on.
     pub fn set_cascades(&mut self, first: usize, splits: Option<&crate::cascade::Splits>) {
-        self.depth_ranges.truncate(first);
+        self.cascades.truncate(first);
         let Some(splits) = splits else { return };
-        self.depth_ranges.resize(first, None);
+        self.cascades.resize(first, None);
         let b = splits.boundaries();
-        for k in 0..splits.count() {
-            let end = if k + 1 == splits.count() { next_f32_up(b[k + 1] as f32) } else { b[k + 1] as f32 };
-            self.depth_ranges.push(Some((b[k] as f32, end)));
+        let n = splits.count();
+        // The f64 midpoints of the bands, cast once, are shared by both
+        // neighbours: the ownership ranges partition the depths exactly.
+        let mid = |k: usize| {
+            if k == 0 {
+                b[0] as f32
+            } else if k == n {
+                next_f32_up(b[n] as f32)
+            } else {
+                (b[k] - 0.5 * splits.band(k - 1)) as f32
+            }
+        };
+        for k in 0..n {
+            let fade_in = if k == 0 { b[0] } else { b[k] - splits.band(k - 1) };
+            let end = if k + 1 == n { f64::from(next_f32_up(b[n] as f32)) } else { b[k + 1] };
+            let fade_out = if splits.band(k) > 0.0 { b[k + 1] - splits.band(k) } else { end };
+            let ramps = [fade_in as f32, b[k] as f32, fade_out as f32, end as f32];
+            self.cascades.push(Some(CascadeSlot { owned: (mid(k), mid(k + 1)), ramps, first: k == 0 }));
         }
     }
 
@@ -625,15 +660,17 @@ impl Renderer {
     /// Light intensity is split so that n lights add up to 1.
     fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
+        let cascade = |i: usize| self.cascades.get(i).and_then(Option::as_ref);
         let raw_lights = |lights: &[LightMatrix], layer: &dyn Fn(usize) -> u32| -> Vec<LightRaw> {
-            let color = light_color(lights.len());
-            let range = |i: usize| self.depth_ranges.get(i).copied().flatten();
+            // A sun's cascades count once.
+            let suns = (0..lights.len()).filter(|&i| cascade(i).is_none_or(|c| c.first)).count();
+            let color = light_color(suns);
             lights
                 .iter()
                 .enumerate()
                 .map(|(i, m)| {
                     let raw = LightRaw::to_raw(m, layer(i), color);
-                    range(i).map_or(raw, |r| raw.with_depth_range(r))
+                    cascade(i).map_or(raw, |c| raw.with_cascade(c))
                 })
                 .collect()
         };

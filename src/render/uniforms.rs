@@ -58,6 +58,9 @@ pub(crate) struct LightRaw {
     depth: [f32; 4],
     /// A spot light's cone: (unit axis, cos half-angle); w = -2 for no cone.
     spot: [f32; 4],
+    /// A cascade's weight ramps (`flags` bit 0): (fade-in start, fade-in
+    /// end, fade-out start, fade-out end) in view depth.
+    cascade: [f32; 4],
 }
 
 impl LightRaw {
@@ -80,16 +83,20 @@ impl LightRaw {
                 Some((axis, cos)) => axis.as_vec3().extend(cos as f32).to_array(),
                 None => [0.0, 0.0, 0.0, -2.0],
             },
+            cascade: [0.0; 4],
         }
     }
 
-    /// Makes this light a cascade that owns view depths `[start, end)`
-    /// (`flags` bit 0; the range in `depth.zw`): the passes look it up only
-    /// there (`cascade_owns` in `shaders/common.wgsl`).
-    pub(crate) fn with_depth_range(mut self, (start, end): (f32, f32)) -> Self {
+    /// Makes this light a cascade (`flags` bit 0) that owns the mask bits
+    /// at view depths `[start, end)` (in `depth.zw`; `cascade_owns` in
+    /// `shaders/common.wgsl`) and lights with weights ramping up over
+    /// `ramps[0]..ramps[1]`, 1 to `ramps[2]`, down to 0 at `ramps[3]`
+    /// (`cascade_weight`).
+    pub(crate) fn with_cascade(mut self, slot: &super::CascadeSlot) -> Self {
         self.flags |= 1;
-        self.depth[2] = start;
-        self.depth[3] = end;
+        self.depth[2] = slot.owned.0;
+        self.depth[3] = slot.owned.1;
+        self.cascade = slot.ramps;
         self
     }
 }
@@ -213,5 +220,5 @@ impl VertexRaw {
 }
 
 const _: () = assert!(std::mem::size_of::<ShadowPassRaw>() as u64 == SHADOW_SLOT_STRIDE);
-const _: () = assert!(std::mem::size_of::<LightRaw>() == 144);
+const _: () = assert!(std::mem::size_of::<LightRaw>() == 160);
 const _: () = assert!(std::mem::size_of::<VertexRaw>() == 28);
