@@ -5,6 +5,7 @@
 //! ```text
 //! cargo run --release --example cascades -- [--cascades 4] [--map 1024] [--size 512]
 //!     [--preset large|default] [--suns 6] [--triangles 300000] [--picture cascades.png]
+//!     [--walk FRAMES [--sun I]]
 //! ```
 //!
 //! Methods: `focused` and `lispsm` (one map of `(s·√K)²`); the cascaded
@@ -22,6 +23,8 @@
 mod support;
 
 use glam::{DVec3, UVec2};
+use lixel::experiment::stability::{CameraPath, Flicker};
+use lixel::experiment::RatioEstimate;
 use lixel::mesh::{ProceduralScene, RayCaster, Scene, ShadowMasks};
 use lixel::render::{CascadePolicy, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop};
 use lixel::{Camera, LightMatrix, Parameterization, ShadowMapSize, ShadowProblem};
@@ -127,6 +130,13 @@ fn run() -> Result<(), String> {
     let caster = RayCaster::new(&scene);
     let options = RendererOptions::default();
     let mut renderer = Renderer::new(&device, &queue, &scene, options).map_err(|e| e.to_string())?;
+    if let Some(frames) = args.value("--walk") {
+        let frames: usize = frames.parse().map_err(|e| format!("--walk: {e}"))?;
+        let sun: usize = args.parse("--sun", 0)?;
+        let light = support::hemisphere_light(sun + suns / 3, suns + suns / 3 + suns / 2);
+        let view = WalkView { scene: &scene, caster: &caster, camera, light, map: cascade_map, size };
+        return walk(&device, &queue, &view, k, frames);
+    }
     let names = ["focused", "lispsm", "csm", "sdsm", "sdsm-lispsm", "optimized-cascades"];
     let mut totals = vec![0u64; names.len()];
     let mut truth_shadowed = 0usize;
@@ -180,5 +190,107 @@ fn run() -> Result<(), String> {
         );
     }
     println!("({suns} suns, {size}² pixels, {truth_shadowed} truly shadowed pixels)");
+    Ok(())
+}
+
+/// What the walk sees.
+struct WalkView<'a> {
+    scene: &'a Scene,
+    caster: &'a RayCaster,
+    camera: Camera,
+    light: lixel::Light,
+    map: ShadowMapSize,
+    size: u32,
+}
+
+/// `--walk FRAMES`: the cascaded loops along the stability tooling's
+/// camera path (a slow walk and turn, [`CameraPath`]), paired frame by
+/// frame (the order alternating): frame time (the loop's frame, waited
+/// for: solving, optimizing and rendering), misclassified pixels, and
+/// flicker ([`Flicker`], as `lixel experiment --stability` defines it).
+/// Each loop is settled at the first view first, and has a renderer of its
+/// own (so that no loop takes another's analysis readbacks).
+fn walk(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    view: &WalkView<'_>,
+    k: usize,
+    frames: usize,
+) -> Result<(), String> {
+    let names = ["csm", "sdsm", "optimized-cascades"];
+    let mut loops = Vec::new();
+    let mut renderers = Vec::new();
+    for policy in
+        [CascadePolicy::csm(k), CascadePolicy::sdsm(k, Parameterization::Focused), CascadePolicy::optimized(k)]
+    {
+        renderers
+            .push(Renderer::new(device, queue, view.scene, RendererOptions::default()).map_err(|e| e.to_string())?);
+        let renderer = renderers.last_mut().ok_or("no renderer")?;
+        let mut shadows =
+            ShadowLoop::new(LoopPolicy::Cascaded(policy), 1, LoopOptions::default()).map_err(|e| e.to_string())?;
+        let lights = [view.light];
+        let first = LoopView { camera: &view.camera, lights: &lights, bounds: view.scene.bounds(), map: view.map };
+        shadows.settle(renderer, &first, 8).map_err(|e| e.to_string())?;
+        loops.push(shadows);
+    }
+    let path = CameraPath { frames, walk: 0.04, turn_degrees: 12.0 };
+    let diagonal = view.scene.bounds().scene().diagonal();
+    let mut times = vec![Vec::new(); names.len()];
+    let mut misclassified = vec![0u64; names.len()];
+    let mut flicker = vec![Flicker::default(); names.len()];
+    let mut previous: Vec<Option<(ShadowMasks, ShadowMasks)>> = vec![None; names.len()];
+    for f in 0..frames {
+        let camera = path.camera(&view.camera, diagonal, f).map_err(|e| e.to_string())?;
+        let truth = view.caster.trace_masks(&camera, &[view.light], view.size, view.size);
+        let lights = [view.light];
+        let loop_view = LoopView { camera: &camera, lights: &lights, bounds: view.scene.bounds(), map: view.map };
+        let order: Vec<usize> = if f % 2 == 0 { (0..names.len()).collect() } else { (0..names.len()).rev().collect() };
+        for m in order {
+            let renderer = &mut renderers[m];
+            let start = std::time::Instant::now();
+            let done = loops[m].frame(renderer, &loop_view).map_err(|e| e.to_string())?;
+            renderer.wait_for(&done.render.submission).map_err(|e| e.to_string())?;
+            times[m].push(start.elapsed().as_secs_f64());
+            // Untimed: the same matrices (cascades as the loop set them) with masks.
+            let masks = render_masks(renderer, &camera, &done.matrices, true)?;
+            misclassified[m] += masks.misclassified(&truth, 0).unwrap_or(0);
+            if std::env::var_os("CASCADES_DEBUG").is_some() {
+                eprintln!(
+                    "frame {f} {}: misclassified {}, readback {:?}, optimized {:#b} failed {:#b} moved {} splits {:?}",
+                    names[m],
+                    masks.misclassified(&truth, 0).unwrap_or(0),
+                    done.readback.map(|r| r.frame),
+                    done.optimized,
+                    done.failed,
+                    done.moved,
+                    done.splits.as_ref().map(|s| s.boundaries().to_vec())
+                );
+            }
+            if let Some((a, truth_a)) = &previous[m] {
+                let step = Flicker::between(a, truth_a, &masks, &truth);
+                flicker[m].stable += step.stable;
+                flicker[m].flipped += step.flipped;
+            }
+            previous[m] = Some((masks, truth.clone()));
+        }
+    }
+    let median = |t: &[f64]| {
+        let mut t = t.to_vec();
+        t.sort_by(f64::total_cmp);
+        t[t.len() / 2]
+    };
+    println!("| method | median frame (ms) | frame time vs csm (paired, 95%) | misclassified | flicker (%) |");
+    println!("|---|---:|---:|---:|---:|");
+    for (m, name) in names.iter().enumerate() {
+        let ratios: Vec<f64> = times[m].iter().zip(&times[0]).map(|(a, b)| a / b).collect();
+        let ratio = RatioEstimate::from_ratios(&ratios).map_or_else(|| "-".to_owned(), |r| r.to_string());
+        println!(
+            "| {name} | {:.1} | {ratio} | {} | {:.3} |",
+            1e3 * median(&times[m]),
+            misclassified[m],
+            100.0 * flicker[m].share()
+        );
+    }
+    println!("({frames} frames of a walk of 4% of the scene diagonal turning 12°, {}² pixels)", view.size);
     Ok(())
 }

@@ -22,6 +22,7 @@ use crate::cascade::{SplitTracker, Splits};
 use crate::mesh::ShadowMasks;
 use crate::optimize::{OptimizeOptions, SampleOptions};
 use crate::{Light, LightMatrix, LixelError, Parameterization, ShadowProblem};
+use glam::DVec3;
 
 use super::{AnalysisReadback, Renderer};
 
@@ -121,6 +122,8 @@ impl CascadePolicy {
 pub(super) struct CascadeState {
     tracker: Option<SplitTracker>,
     optimizers: Vec<CascadeOptimizer>,
+    /// Per light: world points of the last readback's pixels facing it.
+    seen: Vec<Vec<DVec3>>,
     optimize: OptimizeOptions,
 }
 
@@ -157,6 +160,23 @@ pub fn sun_bits(masks: &ShadowMasks, slots: &[usize]) -> Vec<u32> {
         .collect()
 }
 
+/// Whether `matrix` still holds the surfaces the last readback saw
+/// facing the sun (`seen`, world points) that now lie in view depths
+/// `[lo, hi]` of `camera` (the cascade's slice, blend band included), with
+/// 1% of the map's half-width to spare. An optimized cascade was fitted to
+/// the readback's camera; once the camera has moved further than the fit
+/// allows (easily, for a near cascade a few units deep), the cascade falls
+/// back to its focused matrix until the next readback rather than drop what
+/// was seen. Surfaces no readback has seen yet are the analysis cadence's
+/// to find, as for an uncascaded light.
+fn holds(matrix: &LightMatrix, camera: &crate::Camera, (lo, hi): (f64, f64), seen: &[DVec3]) -> bool {
+    const SLACK: f64 = 0.01;
+    seen.iter().all(|&p| {
+        let d = camera.view_depth(p);
+        !(lo..=hi).contains(&d) || matrix.covers(p, SLACK)
+    })
+}
+
 impl CascadeState {
     pub(super) fn new(policy: &CascadePolicy, lights: usize, optimize: OptimizeOptions) -> crate::Result<Self> {
         policy.splits.validate()?;
@@ -165,7 +185,7 @@ impl CascadeState {
             SplitPlacement::Sdsm { hysteresis } => Some(SplitTracker::new(policy.splits, hysteresis)?),
         };
         let optimizers = (0..lights).map(|_| CascadeOptimizer::new(policy.splits.count, &optimize)).collect();
-        Ok(Self { tracker, optimizers, optimize })
+        Ok(Self { tracker, optimizers, seen: vec![Vec::new(); lights], optimize })
     }
 
     fn reset_optimizers(&mut self, count: usize) {
@@ -215,10 +235,21 @@ impl CascadeState {
             return Ok(update);
         }
         let options = SampleOptions::default();
+        let world_from_screen = readback.camera.screen_from_world().inverse();
         for (i, &light) in view.lights.iter().enumerate() {
             if !matches!(light, Light::Directional { .. }) {
                 continue;
             }
+            let range = ((1u64 << slots[i + 1]) - (1u64 << slots[i])) as u32;
+            let masks = &readback.masks;
+            self.seen[i] = (0..masks.height)
+                .flat_map(|y| (0..masks.width).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    let p = (y * masks.width + x) as usize;
+                    masks.visible(p) && masks.facing[p] & range != 0
+                })
+                .map(|(x, y)| world_from_screen.project_point3(readback.screen_point(x, y)))
+                .collect();
             // The samples belong to the camera the pass was rendered with.
             let samples = ShadowProblem::new(readback.camera, light, view.bounds, view.map).and_then(|problem| {
                 let splits = self.splits(policy, &problem)?;
@@ -280,8 +311,9 @@ impl CascadeState {
             };
             let cascades = CascadeProblems::new(&problem, s.clone())?;
             for (k, slice) in cascades.problems().iter().enumerate() {
+                let seen = &self.seen[i];
                 matrices.push(match (&policy.matrices, self.optimizers[i].matrix(k)) {
-                    (CascadeMatrices::Optimized, Some(m)) => *m,
+                    (CascadeMatrices::Optimized, Some(m)) if holds(m, view.camera, s.slice(k), seen) => *m,
                     _ => slice.solve(&fixed)?,
                 });
             }
