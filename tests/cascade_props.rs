@@ -52,6 +52,12 @@ fn check_cover(splits: &Splits, overlap: f64, near: f64, far: f64, probes: &[f64
             let (lo, hi) = splits.slice(c.index + 1);
             prop_assert!(d >= lo && d <= hi, "blend into {} which does not hold {}", c.index + 1, d);
         }
+        // The bit owner's slice holds the depth too (the mask bit is a
+        // lookup of a map that covers the pixel).
+        let owner = c.bit_owner();
+        prop_assert!(owner == c.index || (owner == c.index + 1 && c.blend >= 0.5));
+        let (lo, hi) = splits.slice(owner);
+        prop_assert!(d >= lo && d <= hi, "bit owner {} does not hold {}", owner, d);
     }
     prop_assert!(splits.choose(far + (far - near) * 1e-3).is_none());
     Ok(())

@@ -122,7 +122,7 @@ impl CascadePolicy {
 pub(super) struct CascadeState {
     tracker: Option<SplitTracker>,
     optimizers: Vec<CascadeOptimizer>,
-    /// Per light: world points of the last readback's pixels facing it.
+    /// Per light: world points of the last readback's pixels it shadows.
     seen: Vec<Vec<DVec3>>,
     optimize: OptimizeOptions,
 }
@@ -160,8 +160,9 @@ pub fn sun_bits(masks: &ShadowMasks, slots: &[usize]) -> Vec<u32> {
         .collect()
 }
 
-/// Whether `matrix` still holds the surfaces the last readback saw
-/// facing the sun (`seen`, world points) that now lie in view depths
+/// Whether `matrix` still holds the surfaces the last readback saw in the
+/// sun's shadow (`seen`, world points; lit surfaces may fall outside a map,
+/// which reads as lit, as the optimizer's relevant samples) that now lie in view depths
 /// `[lo, hi]` of `camera` (the cascade's slice, blend band included), with
 /// 1% of the map's half-width to spare. An optimized cascade was fitted to
 /// the readback's camera; once the camera has moved further than the fit
@@ -246,7 +247,7 @@ impl CascadeState {
                 .flat_map(|y| (0..masks.width).map(move |x| (x, y)))
                 .filter(|&(x, y)| {
                     let p = (y * masks.width + x) as usize;
-                    masks.visible(p) && masks.facing[p] & range != 0
+                    masks.visible(p) && masks.facing[p] & range != 0 && masks.shadow[p] & range != 0
                 })
                 .map(|(x, y)| world_from_screen.project_point3(readback.screen_point(x, y)))
                 .collect();
