@@ -294,7 +294,7 @@ impl CascadeState {
             return Err(LixelError::InvalidCascades { reason: "more cascade maps than the renderer has lights" });
         }
         let fixed = match &policy.matrices {
-            CascadeMatrices::Fixed(p) => p.clone(),
+            CascadeMatrices::Fixed(p) => *p,
             CascadeMatrices::Optimized => Parameterization::Focused,
         };
         let mut splits = None;
@@ -329,6 +329,8 @@ impl CascadeState {
 mod tests {
     use super::*;
 
+    // The binary literals are grouped by light slot (second sun | point | first sun).
+    #[allow(clippy::unusual_byte_groupings)]
     #[test]
     fn a_suns_bit_is_the_or_of_its_cascades() {
         // Slots: a sun in 0..3, a point light in 3, a sun in 4..6.
