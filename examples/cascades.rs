@@ -23,9 +23,9 @@
 mod support;
 
 use glam::{DVec3, UVec2};
-use lixel::experiment::stability::{CameraPath, Flicker};
+use lixel::experiment::stability::CameraPath;
 use lixel::experiment::RatioEstimate;
-use lixel::mesh::{ProceduralScene, RayCaster, Scene, ShadowMasks};
+use lixel::mesh::{Flicker, ProceduralScene, RayCaster, Scene, ShadowMasks};
 use lixel::render::{CascadePolicy, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop};
 use lixel::{Camera, LightMatrix, Parameterization, ShadowMapSize, ShadowProblem};
 
@@ -267,9 +267,7 @@ fn walk(
                 );
             }
             if let Some((a, truth_a)) = &previous[m] {
-                let step = Flicker::between(a, truth_a, &masks, &truth);
-                flicker[m].stable += step.stable;
-                flicker[m].flipped += step.flipped;
+                flicker[m] = flicker[m].merged(Flicker::between(0, a, truth_a, &masks, &truth));
             }
             previous[m] = Some((masks, truth.clone()));
         }
