@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --example cascades -- [--cascades 4] [--map 1024] [--size 512]
-//!     [--preset large|default] [--suns 6] [--triangles 300000] [--picture cascades.png]
+//!     [--preset large|default] [--suns 6] [--triangles 300000] [--picture cascades.png [--picture-method csm]]
 //!     [--walk FRAMES [--sun I]]
 //! ```
 //!
@@ -15,7 +15,9 @@
 //! scene, texel-snapped focused maps), `sdsm` (log splits inside the visible
 //! depth range of the analysis readback, focused maps), `sdsm-lispsm` (same
 //! splits, LiSPSM maps), `optimized-cascades` (same splits, each cascade
-//! scene-optimized from the readback). The large preset puts the eye 1.7
+//! scene-optimized from the readback). `--picture` tints the first sun's
+//! image by cascade for one cascaded method (optimized-cascades unless
+//! `--picture-method` names another). The large preset puts the eye 1.7
 //! units above a 2000-unit floor with objects over 1500 units and a far
 //! plane of 1500.
 
@@ -138,6 +140,10 @@ fn run() -> Result<(), String> {
         return walk(&device, &queue, &view, k, frames);
     }
     let names = ["focused", "lispsm", "csm", "sdsm", "sdsm-lispsm", "optimized-cascades"];
+    let picture_method = args.value("--picture-method").unwrap_or("optimized-cascades");
+    if !names[2..].contains(&picture_method) {
+        return Err(format!("--picture-method {picture_method:?}: one of {:?}", &names[2..]));
+    }
     let mut totals = vec![0u64; names.len()];
     let mut truth_shadowed = 0usize;
     for s in 0..suns {
@@ -169,7 +175,7 @@ fn run() -> Result<(), String> {
             counts.push(
                 render_masks(&mut renderer, &camera, &settled.matrices, true)?.misclassified(&truth, 0).unwrap_or(0),
             );
-            if let (0, 0, Some(path)) = (s, i, args.value("--picture")) {
+            if let (0, true, Some(path)) = (s, names[i + 2] == picture_method, args.value("--picture")) {
                 picture(&renderer, path)?;
             }
             last_splits = shadows.frame(&mut renderer, &view).map_err(|e| e.to_string())?.splits;
