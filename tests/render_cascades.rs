@@ -162,6 +162,59 @@ fn each_pixel_uses_the_cascade_the_cpu_chooses() {
     assert!(cascaded <= focused, "cascades {cascaded} vs one focused map {focused}");
 }
 
+/// Splits placed over part of the visible depths (as SDSM splits from an
+/// earlier readback are when the camera has moved): pixels nearer than the
+/// first split use the first cascade, beyond the last split the last one,
+/// never no cascade (which would leave them without the sun).
+#[test]
+fn depths_outside_the_splits_use_the_end_cascades() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let size = 96;
+    let (camera, sun) = loop_view(size);
+    let problem = ShadowProblem::new(camera, sun, scene.bounds(), ShadowMapSize::square(128)).unwrap();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    // Which pixels face the sun, and their view depths, from one plain map.
+    let one = [problem.solve(&Parameterization::Focused).unwrap()];
+    renderer.render(&Frame { masks: true, ..Frame::new(&camera, &one) }).unwrap();
+    let plain = renderer.read_masks().unwrap();
+    let world_from_screen = camera.screen_from_world().inverse();
+    let depths: Vec<(usize, f64)> = (0..size * size)
+        .map(|i| i as usize)
+        .filter(|&i| plain.visible(i) && plain.facing[i] & 1 == 1)
+        .map(|i| {
+            let (x, y) = (i as u32 % size, i as u32 / size);
+            let pixel = DVec2::new(f64::from(x), f64::from(y)) + 0.5;
+            (i, camera.view_depth(world_from_screen.project_point3(pixel.extend(f64::from(plain.depth[i])))))
+        })
+        .collect();
+    let mut sorted: Vec<f64> = depths.iter().map(|d| d.1).collect();
+    sorted.sort_by(f64::total_cmp);
+    let (near, far) = (sorted[sorted.len() / 4], sorted[3 * sorted.len() / 4]);
+    let splits = CascadeSplits { count: 3, scheme: SplitScheme::Logarithmic, overlap: 0.1 }.place(near, far).unwrap();
+    let matrices: Vec<_> = CascadeProblems::new(&problem, splits.clone())
+        .unwrap()
+        .solve(&Parameterization::Focused)
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    renderer.set_cascades(0, Some(&splits));
+    renderer.render(&Frame { masks: true, ..Frame::new(&camera, &matrices) }).unwrap();
+    let masks = renderer.read_masks().unwrap();
+    let (mut nearer, mut beyond) = (0, 0);
+    for &(i, d) in &depths {
+        // f32 positions: leave the split ends themselves out.
+        if d < near * 0.999 {
+            nearer += 1;
+            assert_eq!(masks.facing[i], 0b001, "pixel {i} at depth {d} (splits {near}..{far})");
+        } else if d > far * 1.001 {
+            beyond += 1;
+            assert_eq!(masks.facing[i], 0b100, "pixel {i} at depth {d} (splits {near}..{far})");
+        }
+    }
+    assert!(nearer > 100 && beyond > 100, "{nearer} nearer, {beyond} beyond the splits");
+}
+
 /// The colour of a frame whose lights are the cascades of `splits`.
 fn hard_or_blended(
     renderer: &mut Renderer,

@@ -89,16 +89,6 @@ pub(crate) struct CascadeSlot {
     pub(crate) first: bool,
 }
 
-fn next_f32_up(x: f32) -> f32 {
-    if x == 0.0 {
-        f32::from_bits(1)
-    } else if x > 0.0 {
-        f32::from_bits(x.to_bits() + 1)
-    } else {
-        f32::from_bits(x.to_bits() - 1)
-    }
-}
-
 /// Why the renderer refused a request.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -470,6 +460,14 @@ impl Renderer {
     ///   most one bit per sun is set, and the sun's bit is the OR of its
     ///   cascades' bits.
     ///
+    /// Depths nearer than the first split belong to the first cascade and
+    /// depths beyond the last split to the last one (where `choose` says
+    /// `None`): splits placed from an earlier readback (SDSM) lag a moving
+    /// camera, and a surface the camera has come closer to than the
+    /// readback's nearest depth, or sees beyond its farthest, is looked up
+    /// in the nearest cascade (outside its map: lit) rather than left
+    /// without the sun.
+    ///
     /// A cascaded sun counts as one light in the split of light intensity.
     /// Other lights are unaffected; `None` for a `splits` clears the lights
     /// from `first` on.
@@ -481,20 +479,22 @@ impl Renderer {
         let n = splits.count();
         // The f64 midpoints of the bands, cast once, are shared by both
         // neighbours: the ownership ranges partition the depths exactly.
+        // The end cascades reach past the splits (-f32::MAX, f32::MAX): see above.
         let mid = |k: usize| {
             if k == 0 {
-                b[0] as f32
+                -f32::MAX
             } else if k == n {
-                next_f32_up(b[n] as f32)
+                f32::MAX
             } else {
                 (b[k] - 0.5 * splits.band(k - 1)) as f32
             }
         };
         for k in 0..n {
-            let fade_in = if k == 0 { b[0] } else { b[k] - splits.band(k - 1) };
-            let end = if k + 1 == n { f64::from(next_f32_up(b[n] as f32)) } else { b[k + 1] };
-            let fade_out = if splits.band(k) > 0.0 { b[k + 1] - splits.band(k) } else { end };
-            let ramps = [fade_in as f32, b[k] as f32, fade_out as f32, end as f32];
+            let start = if k == 0 { -f32::MAX } else { b[k] as f32 };
+            let fade_in = if k == 0 { -f32::MAX } else { (b[k] - splits.band(k - 1)) as f32 };
+            let end = if k + 1 == n { f32::MAX } else { b[k + 1] as f32 };
+            let fade_out = if splits.band(k) > 0.0 && k + 1 < n { (b[k + 1] - splits.band(k)) as f32 } else { end };
+            let ramps = [fade_in, start, fade_out, end];
             self.cascades.push(Some(CascadeSlot { owned: (mid(k), mid(k + 1)), ramps, first: k == 0 }));
         }
     }
