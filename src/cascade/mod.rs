@@ -275,7 +275,8 @@ impl Splits {
     /// `[near, far]` or for a non-finite depth. The renderer implements the
     /// same choice (`render::Renderer::set_cascades`, `cascade_weight` and
     /// `cascade_owns` in `shaders/common.wgsl`; `tests/render_cascades.rs`
-    /// checks that they agree).
+    /// checks that they agree) and, where this says `None`, gives depths
+    /// nearer than `near` to the first cascade and beyond `far` to the last.
     #[must_use]
     pub fn choose(&self, depth: f64) -> Option<CascadeChoice> {
         if !(depth >= self.near() && depth <= self.far()) {
