@@ -176,6 +176,7 @@ impl SweepPass {
         encoder: &mut wgpu::CommandEncoder,
         maps: &SgsmMaps,
         sizes: &[(u32, u32)],
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
         if sizes.is_empty() {
             return;
@@ -186,10 +187,8 @@ impl SweepPass {
             raw[at..at + 3].copy_from_slice(&[*w, *h, i as u32]);
         }
         queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&raw));
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("lixel sgsm sweep"),
-            timestamp_writes: None,
-        });
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("lixel sgsm sweep"), timestamp_writes });
         pass.set_pipeline(&self.pipeline);
         for (i, (_, h)) in sizes.iter().enumerate() {
             pass.set_bind_group(0, &maps.bind_group, &[(i as u64 * SLOT_STRIDE) as u32]);
