@@ -25,9 +25,9 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 
-use super::{write_atomic, Counts, ExperimentConfig, ExperimentError, MethodKind, Preset, Runner, Truth};
+use super::{write_atomic, Counts, ExperimentConfig, ExperimentError, MethodSpec, Preset, Runner, Truth};
 use crate::mesh::ShadowMasks;
-use crate::optimize::{AcceptMeasure, OptimizeOptions, SearchStrategy, TexelSnap};
+use crate::optimize::{AcceptMeasure, OptimizeOptions, TexelSnap};
 use crate::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
 use crate::{Camera, ShadowMapSize};
 
@@ -132,7 +132,7 @@ impl Flicker {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Variant {
     /// The method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// The option set's name in the report (`default` for the defaults).
     pub options: String,
     /// The optimizer's options (scene-optimized methods only; `None` for
@@ -143,14 +143,14 @@ pub struct Variant {
 impl Variant {
     /// A method with its default options.
     #[must_use]
-    pub fn of(method: MethodKind) -> Self {
+    pub fn of(method: MethodSpec) -> Self {
         Self { method, options: "default".into(), optimize: None }
     }
 
     /// The scene optimizer (paper search) with `optimize`, named `options`.
     #[must_use]
     pub fn optimized(options: &str, optimize: OptimizeOptions) -> Self {
-        Self { method: MethodKind::Optimized, options: options.into(), optimize: Some(optimize) }
+        Self { method: MethodSpec::OPTIMIZED, options: options.into(), optimize: Some(optimize) }
     }
 
     /// The option sets of the scene optimizer that `--stability-options`
@@ -178,7 +178,7 @@ impl Variant {
                 OptimizeOptions { hold: true, snap, max_turn_degrees: turn, ..paper.clone() },
             ),
             Self {
-                method: MethodKind::OptimizedArgmin,
+                method: MethodSpec::OPTIMIZED_ARGMIN,
                 options: "hold".into(),
                 optimize: Some(OptimizeOptions { hold: true, ..paper }),
             },
@@ -200,7 +200,7 @@ impl Variant {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilityRow {
     /// The method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// Its option set's name (`default` for the defaults).
     pub options: String,
     /// Flicker share per frame transition (`frames - 1` values).
@@ -257,7 +257,7 @@ fn mean(values: impl Iterator<Item = f64>) -> f64 {
 
 /// How one method produces its matrix frame after frame.
 enum Source {
-    Fixed(MethodKind),
+    Fixed(MethodSpec),
     Loop(Box<ShadowLoop>),
 }
 
@@ -317,27 +317,21 @@ pub fn measure_variants(
     let mut rows = Vec::new();
     for (m, variant) in variants.iter().enumerate() {
         let method = variant.method;
-        let mut source = match method {
-            MethodKind::Optimized | MethodKind::OptimizedArgmin => {
-                let strategy = if method == MethodKind::Optimized {
-                    SearchStrategy::Paper
-                } else {
-                    SearchStrategy::NelderMead { max_iterations: 150 }
-                };
-                let optimize = variant.optimize.clone().unwrap_or_default();
-                let optimize = OptimizeOptions { strategy, ..optimize };
-                let mut shadows =
-                    ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() })?;
-                let view = LoopView {
-                    camera: &cameras[0],
-                    lights: std::slice::from_ref(&light),
-                    bounds: runner.scene.bounds(),
-                    map,
-                };
-                shadows.settle(&mut runner.renderer, &view, config.max_optimize_frames)?;
-                Source::Loop(Box::new(shadows))
-            }
-            other => Source::Fixed(other),
+        let mut source = if method.parameterization(None).is_some() {
+            Source::Fixed(method)
+        } else {
+            let optimize = variant.optimize.clone().unwrap_or_default();
+            let optimize = OptimizeOptions { strategy: method.search().strategy(), ..optimize };
+            let options = LoopOptions { optimize, lookup: method.lookup(), ..Default::default() };
+            let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, options)?;
+            let view = LoopView {
+                camera: &cameras[0],
+                lights: std::slice::from_ref(&light),
+                bounds: runner.scene.bounds(),
+                map,
+            };
+            shadows.settle(&mut runner.renderer, &view, config.max_optimize_frames)?;
+            Source::Loop(Box::new(shadows))
         };
         let mut row = StabilityRow {
             method,
@@ -363,7 +357,7 @@ pub fn measure_variants(
                     frame.matrices[0]
                 }
             };
-            let masks = runner.masks(&matrix)?;
+            let masks = runner.masks_with(&matrix, method.lookup())?;
             row.misclassified.push(Counts::compare(&masks, &truths[f]).misclassified());
             if let Some((prev, prev_matrix)) = &previous {
                 row.flicker.push(Flicker::between(prev, &truths[f - 1], &masks, &truths[f]).share());
@@ -372,7 +366,7 @@ pub fn measure_variants(
                 let shimmer = if *prev_matrix == matrix {
                     0.0
                 } else {
-                    let held = runner.masks(prev_matrix)?;
+                    let held = runner.masks_with(prev_matrix, method.lookup())?;
                     Flicker::between(&held, &truths[f], &masks, &truths[f]).share()
                 };
                 row.shimmer.push(shimmer);
@@ -456,7 +450,7 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
     md
 }
 
-fn color(method: MethodKind) -> String {
+fn color(method: MethodSpec) -> String {
     let c = super::plots::color(method);
     format!("#{:02x}{:02x}{:02x}", c.0, c.1, c.2)
 }
@@ -603,7 +597,7 @@ mod tests {
     #[test]
     fn percentile_and_means() {
         let row = StabilityRow {
-            method: MethodKind::Focused,
+            method: MethodSpec::FOCUSED,
             options: "default".into(),
             flicker: (1..=20).map(|i| f64::from(i) / 100.0).collect(),
             shimmer: vec![0.0, 0.5],
