@@ -11,7 +11,9 @@
 //    plane (corner 0's triangle) decides;
 // 3. a recognised pattern (every stored triangle reaching into the texel
 //    lies on a corner plane): of the participating triangles (the word's
-//    slot bits) those containing p; the nearest one's plane decides;
+//    slot bits) those containing p; the nearest one's plane decides (each
+//    plane's packing tolerance counted, so p is shadowed exactly when one
+//    of them is in front of it);
 // 4. otherwise (unrecognised, or p on none of them) SPSM's lookup.
 
 @group(1) @binding(2) var sgsm_masks: texture_2d_array<u32>;
@@ -62,7 +64,6 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         // Every triangle reaching into the texel is on a corner plane: the
         // nearest participating one containing p decides.
         var best = 3.0e38;
-        var chosen: SpsmTexel;
         var found = false;
         for (var slot = 0u; slot < 9u; slot++) {
             if (word & (1u << slot)) == 0u {
@@ -70,17 +71,19 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
             }
             let t = spsm_load(light, k + sgsm_slot_offset(slot));
             if t.kind == 0u && sgsm_contains(t, p, 0.0) {
-                let depth = spsm_plane_at(t, p).x;
+                // Nearest counting each plane's packing tolerance: shadowed
+                // exactly when some containing plane is in front of p.
+                let plane = spsm_plane_at(t, p);
+                let depth = plane.x + SPSM_TOLERANCE * plane.y;
                 if !found || depth < best {
                     best = depth;
-                    chosen = t;
                     found = true;
                 }
             }
         }
         if found {
             sgsm_count(SGSM_PATH_PATTERN);
-            return sgsm_plane_test(chosen, p, zeta);
+            return best < zeta - SPSM_BIAS;
         }
     }
     sgsm_count(SGSM_PATH_FALLBACK);
