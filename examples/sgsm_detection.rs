@@ -7,9 +7,16 @@
 //! keep. On the built-in scene and on dense curved meshes (a sphere and a
 //! torus on a floor). No GPU needed.
 //!
+//! `--closeup PATH` instead renders the tiny built-in scene with SPSM and
+//! SGSM (focused 256² map, a point light above), compares both with the ray cast and writes
+//! the 64x64-pixel window where SPSM errs most against SGSM, enlarged:
+//! SPSM left, SGSM right (grey: correct, dark: shadow; red: false shadow;
+//! blue: false light).
+//!
 //! ```text
 //! cargo run --release --example sgsm_detection -- [--maps 512,1024]
 //!     [--triangles 1137772] [--curved 200000] [--samples 8]
+//! cargo run --release --example sgsm_detection -- --closeup docs/sgsm-closeup.png
 //! ```
 
 #[path = "support/mod.rs"]
@@ -44,6 +51,9 @@ fn curved(name: &str, mesh: lixel::mesh::Mesh) -> Scene {
 
 fn run() -> Result<(), String> {
     let args = support::Args::from_env();
+    if let Some(path) = args.value("--closeup") {
+        return closeup(path);
+    }
     let maps: Vec<u32> = args.list("--maps", &[512, 1024])?;
     let triangles: usize = args.parse("--triangles", 1_137_772)?;
     let dense: usize = args.parse("--curved", 200_000)?;
@@ -112,4 +122,83 @@ fn row(name: &str, light: &Light, map: u32, d: &Detection) -> String {
         d.touching[2],
         d.touching[3]
     )
+}
+
+/// Error colours of one method's light-0 bits against the truth.
+fn errors(masks: &lixel::mesh::ShadowMasks, truth: &lixel::mesh::ShadowMasks) -> (image::RgbaImage, Vec<bool>) {
+    let wrong: Vec<bool> = (0..truth.shadow.len())
+        .map(|i| truth.visible(i) && truth.facing[i] & 1 == 1 && (masks.shadow[i] ^ truth.shadow[i]) & 1 == 1)
+        .collect();
+    let image = image::RgbaImage::from_fn(truth.width, truth.height, |x, y| {
+        let i = (y * truth.width + x) as usize;
+        let (t, m) = (truth.shadow[i] & 1 == 1, masks.shadow[i] & 1 == 1);
+        image::Rgba(match (truth.visible(i), wrong[i], t, m) {
+            (false, ..) => [255, 255, 255, 255],
+            (_, true, _, true) => [220, 40, 40, 255],
+            (_, true, _, false) => [40, 90, 230, 255],
+            (_, false, true, _) => [90, 90, 90, 255],
+            (_, false, false, _) => [200, 200, 200, 255],
+        })
+    });
+    (image, wrong)
+}
+
+fn closeup(path: &str) -> Result<(), String> {
+    use lixel::render::{Frame, Renderer, RendererOptions, SgsmOptions, ShadowLookup, SpsmOptions};
+    let scene = ProceduralScene::tiny().build();
+    let size = 320;
+    let camera = Camera::look_at(
+        DVec3::new(4.0, 5.0, 34.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        55f64.to_radians(),
+        UVec2::splat(size),
+        0.5,
+        150.0,
+    )
+    .map_err(|e| e.to_string())?;
+    let lights = [Light::point(DVec3::new(-8.0, 30.0, 12.0))];
+    let m = ShadowProblem::new(camera, lights[0], scene.bounds(), ShadowMapSize::square(256))
+        .and_then(|p| p.solve(&Parameterization::Focused))
+        .map_err(|e| e.to_string())?;
+    let (device, queue, _) = support::gpu()?;
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).map_err(|e| e.to_string())?;
+    let truth = lixel::mesh::RayCaster::new(&scene).trace_masks(&camera, &lights, size, size);
+    let mut out = Vec::new();
+    for lookup in [ShadowLookup::Spsm(SpsmOptions::PAPER), ShadowLookup::Sgsm(SgsmOptions::PAPER)] {
+        let lights = [m];
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &lights) }).map_err(|e| e.to_string())?;
+        out.push(errors(&renderer.read_masks().map_err(|e| e.to_string())?, &truth));
+    }
+    let count = |w: &[bool]| w.iter().filter(|&&b| b).count();
+    println!("misclassified pixels (light 0, {size}²): SPSM {}, SGSM {}", count(&out[0].1), count(&out[1].1));
+    // The window where SPSM's errors exceed SGSM's most.
+    let win = 64;
+    let mut best = (i64::MIN, 0, 0);
+    for y in (0..size - win).step_by(4) {
+        for x in (0..size - win).step_by(4) {
+            let mut d = 0i64;
+            for j in y..y + win {
+                for i in x..x + win {
+                    let k = (j * size + i) as usize;
+                    d += i64::from(out[0].1[k]) - i64::from(out[1].1[k]);
+                }
+            }
+            if d > best.0 {
+                best = (d, x, y);
+            }
+        }
+    }
+    let (d, x, y) = best;
+    println!("window {win}x{win} at ({x}, {y}): SPSM errs at {d} more pixels than SGSM");
+    let crops: Vec<image::RgbaImage> = out
+        .iter()
+        .map(|(img, _)| {
+            let crop = image::imageops::crop_imm(img, x, y, win, win).to_image();
+            image::imageops::resize(&crop, win * 4, win * 4, image::imageops::FilterType::Nearest)
+        })
+        .collect();
+    support::montage(&crops, 2).save(path).map_err(|e| e.to_string())?;
+    println!("wrote {path}");
+    Ok(())
 }
