@@ -26,7 +26,7 @@ use std::path::Path;
 use glam::{DQuat, DVec3};
 
 use super::{write_atomic, Counts, ExperimentConfig, ExperimentError, MethodSpec, Preset, Runner, Truth};
-use crate::mesh::ShadowMasks;
+use crate::mesh::{Flicker, ShadowMasks};
 use crate::optimize::{AcceptMeasure, OptimizeOptions, TexelSnap};
 use crate::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
 use crate::{Camera, ShadowMapSize};
@@ -83,46 +83,6 @@ impl CameraPath {
             start.z_near(),
             start.z_far(),
         )?)
-    }
-}
-
-/// Flicker between two consecutive frames of one method (light 0).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Flicker {
-    /// Pixels counted in both frames whose truth bit did not change.
-    pub stable: u64,
-    /// Of those, pixels whose method bit changed.
-    pub flipped: u64,
-}
-
-impl Flicker {
-    /// Compares frames `a` and `b` of a method with the truths of the same
-    /// frames. Pixels counted (visible, light-facing) in both truths and with
-    /// the same truth bit are `stable`; those among them whose method bit
-    /// differs are `flipped`.
-    #[must_use]
-    pub fn between(a: &ShadowMasks, truth_a: &ShadowMasks, b: &ShadowMasks, truth_b: &ShadowMasks) -> Self {
-        let n = a.depth.len().min(b.depth.len()).min(truth_a.depth.len()).min(truth_b.depth.len());
-        let counted = |t: &ShadowMasks, i: usize| t.visible(i) && t.facing[i] & 1 == 1;
-        let mut out = Self::default();
-        for i in 0..n {
-            if !counted(truth_a, i) || !counted(truth_b, i) || (truth_a.shadow[i] ^ truth_b.shadow[i]) & 1 == 1 {
-                continue;
-            }
-            out.stable += 1;
-            out.flipped += u64::from((a.shadow[i] ^ b.shadow[i]) & 1);
-        }
-        out
-    }
-
-    /// `flipped / stable` (0 when nothing was counted).
-    #[must_use]
-    pub fn share(&self) -> f64 {
-        if self.stable == 0 {
-            0.0
-        } else {
-            self.flipped as f64 / self.stable as f64
-        }
     }
 }
 
@@ -360,14 +320,14 @@ pub fn measure_variants(
             let masks = runner.masks_with(&matrix, method.lookup())?;
             row.misclassified.push(Counts::compare(&masks, &truths[f]).misclassified());
             if let Some((prev, prev_matrix)) = &previous {
-                row.flicker.push(Flicker::between(prev, &truths[f - 1], &masks, &truths[f]).share());
+                row.flicker.push(Flicker::between(0, prev, &truths[f - 1], &masks, &truths[f]).share());
                 // The previous frame's map seen from this camera: what the
                 // map change alone flipped.
                 let shimmer = if *prev_matrix == matrix {
                     0.0
                 } else {
                     let held = runner.masks_with(prev_matrix, method.lookup())?;
-                    Flicker::between(&held, &truths[f], &masks, &truths[f]).share()
+                    Flicker::between(0, &held, &truths[f], &masks, &truths[f]).share()
                 };
                 row.shimmer.push(shimmer);
             }
@@ -561,38 +521,6 @@ mod tests {
     use glam::UVec2;
 
     use super::*;
-
-    fn masks(shadow: &[u32], facing: &[u32]) -> ShadowMasks {
-        ShadowMasks {
-            width: shadow.len() as u32,
-            height: 1,
-            depth: vec![0.5; shadow.len()],
-            shadow: shadow.to_vec(),
-            facing: facing.to_vec(),
-        }
-    }
-
-    #[test]
-    fn truth_flips_are_excluded() {
-        let facing = [1, 1, 1, 1, 0];
-        let truth_a = masks(&[0, 1, 0, 1, 0], &facing);
-        let truth_b = masks(&[0, 1, 1, 0, 0], &facing); // pixels 2 and 3 really change
-        let a = masks(&[0, 1, 0, 1, 0], &facing);
-        let b = masks(&[1, 0, 1, 0, 1], &facing); // flips 0, 1 (errors), 2, 3 (truth), 4 (not counted)
-        let f = Flicker::between(&a, &truth_a, &b, &truth_b);
-        assert_eq!(f, Flicker { stable: 2, flipped: 2 });
-        assert_eq!(f.share(), 1.0);
-        // Following the truth exactly is no flicker.
-        assert_eq!(Flicker::between(&truth_a, &truth_a, &truth_b, &truth_b).flipped, 0);
-    }
-
-    #[test]
-    fn identical_frames_do_not_flicker() {
-        let facing = [1, 1, 1];
-        let t = masks(&[1, 0, 1], &facing);
-        let m = masks(&[0, 0, 1], &facing);
-        assert_eq!(Flicker::between(&m, &t, &m, &t), Flicker { stable: 3, flipped: 0 });
-    }
 
     #[test]
     fn percentile_and_means() {
