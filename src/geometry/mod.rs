@@ -28,6 +28,7 @@ mod polyhedron;
 mod validation;
 
 pub use clip::ClipWorkspace;
+pub(crate) use cone::min_enclosing_cone_in;
 pub use cone::{min_enclosing_cone, Cone};
 pub use plane::Plane;
 pub use polyhedron::{ConvexPolyhedron, Face};
