@@ -1,6 +1,7 @@
 //! Memory use across repeated calls of the optimizer, the all-lights sample
 //! extraction and the classical methods (its own test binary with one test:
 //! the allocation counters are global, so no other test may run beside it).
+//! The classical methods must not allocate at all once warm (issue 15).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
@@ -64,12 +65,24 @@ fn repeated_calls_do_not_grow_memory() {
     steady_state("all-lights extraction", || {
         std::hint::black_box(Samples::from_readback_all(&problems, &readback, &SampleOptions::default()).unwrap());
     });
+    // Every classical method, after warm-up: no allocation at all, neither
+    // for a frame's lights on one camera (the camera cache hits) nor with the
+    // camera changing on every call (it misses and rebuilds in place).
+    let (other_camera, _) = common::setup_with_eye(&lights, DVec3::new(3.0, 2.5, 6.0));
     for parameterization in Parameterization::ALL_DEFAULT {
-        for problem in &problems {
-            steady_state(parameterization.method().name(), || {
+        let name = parameterization.method().name();
+        let per_call = steady_state(&format!("{name}, 3 lights, one camera"), || {
+            for problem in &problems {
                 std::hint::black_box(problem.solve(&parameterization).ok());
-            });
-        }
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates after warm-up");
+        let per_call = steady_state(&format!("{name}, camera changing every call"), || {
+            for problem in problems.iter().zip(&other_camera).flat_map(|(a, b)| [a, b]) {
+                std::hint::black_box(problem.solve(&parameterization).ok());
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates after warm-up when the camera changes");
     }
 }
 
