@@ -7,7 +7,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 
 use glam::DVec3;
-use lixel::optimize::{OptimizeOptions, Optimizer, SampleOptions};
+use lixel::optimize::{OptimizeOptions, Optimizer, SampleOptions, SampleWorkspace};
 use lixel::{Light, Parameterization, Samples};
 
 mod common;
@@ -62,9 +62,28 @@ fn repeated_calls_do_not_grow_memory() {
     ];
     let (problems, readback) = common::setup(&lights);
     let readback = readback.as_readback(false);
-    steady_state("all-lights extraction", || {
+    steady_state("all-lights extraction (fresh samples)", || {
         std::hint::black_box(Samples::from_readback_all(&problems, &readback, &SampleOptions::default()).unwrap());
     });
+    // Into reused samples and workspace: nothing, but for rayon's own
+    // scheduling when the `rayon` feature computes the bodies in parallel.
+    let (mut out, mut workspace) = (Vec::new(), SampleWorkspace::new());
+    let per_call = steady_state("all-lights extraction into reused samples", || {
+        Samples::from_readback_all_into(&problems, &readback, &SampleOptions::default(), &mut out, &mut workspace)
+            .unwrap();
+        std::hint::black_box(&out);
+    });
+    if !cfg!(feature = "rayon") {
+        assert_eq!(per_call, 0.0, "all-lights extraction into reused buffers allocates after warm-up");
+    }
+    let mut one = Samples::from_readback(&problems[1], &readback, 1, &SampleOptions::default()).unwrap();
+    let per_call = steady_state("one-light extraction into reused samples", || {
+        for (bit, problem) in problems.iter().enumerate() {
+            one.from_readback_into(problem, &readback, bit as u32, &SampleOptions::default(), &mut workspace).unwrap();
+            std::hint::black_box(&one);
+        }
+    });
+    assert_eq!(per_call, 0.0, "one-light extraction into reused buffers allocates after warm-up");
     // Every classical method, after warm-up: no allocation at all, neither
     // for a frame's lights on one camera (the camera cache hits) nor with the
     // camera changing on every call (it misses and rebuilds in place).

@@ -9,7 +9,7 @@ use crate::error::{LixelError, Result};
 use crate::geometry::ConvexPolyhedron;
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
-use crate::workspace::{with_workspace, SolveWorkspace};
+use crate::workspace::SolveWorkspace;
 
 pub(super) fn solve(problem: &ShadowProblem, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
     solve_as(problem, Method::Focused, None, ws)
@@ -54,13 +54,12 @@ pub(crate) fn from_bodies(
     problem: &ShadowProblem,
     focus: &ConvexPolyhedron,
     casters: &ConvexPolyhedron,
+    ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
-    with_workspace(|ws| {
-        if focus.is_empty() {
-            return solve(problem, ws);
-        }
-        let frame = problem.frame_towards(focus);
-        let axis = super::uniform_axis(problem, &frame, focus, Method::Focused, ws)?;
-        problem.place_with_casters(frame, axis, focus, casters, Method::Focused, None, ws)
-    })
+    if focus.is_empty() {
+        return solve(problem, ws);
+    }
+    let frame = problem.frame_towards(focus);
+    let axis = super::uniform_axis(problem, &frame, focus, Method::Focused, ws)?;
+    problem.place_with_casters(frame, axis, focus, casters, Method::Focused, None, ws)
 }

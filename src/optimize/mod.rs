@@ -11,6 +11,7 @@
 //! its buffers) every few frames per light; [`ShadowScheduler`] keeps the
 //! per-light state and the paper's cadence.
 
+mod extract;
 mod objective;
 mod samples;
 mod schedule;
@@ -24,6 +25,7 @@ use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::min_enclosing_cone_in;
 use crate::matrix::{fit_homography, holds_all, AxisFit, Fallback, LightMatrix, Method};
 
+pub use extract::SampleWorkspace;
 pub use objective::{
     objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
     SampleGradient,
