@@ -20,13 +20,21 @@ pub struct ClipWorkspace {
     dist: Vec<f64>,
     side: Vec<Side>,
     new_index: Vec<usize>,
-    cuts: IndexMap<(usize, usize), usize>,
+    /// The cut point of each crossed edge (sorted vertex pair), in the order
+    /// made: a clip makes a handful, so a list beats a hash map.
+    cuts: Vec<((usize, usize), usize)>,
+    /// Per new vertex: on the plane (kept within `eps` of it, or a cut point).
+    on_plane: Vec<bool>,
     pub(super) edges: IndexMap<(usize, usize), usize>,
     walker: LoopWalker,
     pub(super) flags: Vec<bool>,
     pub(super) silhouette: Vec<(usize, usize, usize, usize)>,
     /// The second body of a chain of clips (swapped with the result).
     pub(super) spare: ConvexPolyhedron,
+    /// Tests only: find the cap's boundary by looking up every edge's
+    /// reverse in all faces (the reference the fast path must equal).
+    #[cfg(test)]
+    pub(super) reference_boundary: bool,
 }
 
 impl ClipWorkspace {
@@ -72,7 +80,9 @@ impl ConvexPolyhedron {
             return true;
         }
         let eps = eps.max(0.0);
-        let ClipWorkspace { dist, side, new_index, cuts, edges, walker, .. } = workspace;
+        #[cfg(test)]
+        let reference = workspace.reference_boundary;
+        let ClipWorkspace { dist, side, new_index, cuts, on_plane, edges, walker, .. } = workspace;
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
         side.clear();
@@ -105,12 +115,16 @@ impl ConvexPolyhedron {
                 }
                 if side[a].is_opposite(side[b]) {
                     let key = (a.min(b), a.max(b));
-                    let cut = *cuts.entry(key).or_insert_with(|| {
-                        let (i, j) = key;
-                        let t = dist[i] / (dist[i] - dist[j]);
-                        vertices.push(self.vertices[i].lerp(self.vertices[j], t));
-                        vertices.len() - 1
-                    });
+                    let cut = match cuts.iter().find(|(k, _)| *k == key) {
+                        Some(&(_, cut)) => cut,
+                        None => {
+                            let (i, j) = key;
+                            let t = dist[i] / (dist[i] - dist[j]);
+                            vertices.push(self.vertices[i].lerp(self.vertices[j], t));
+                            cuts.push((key, vertices.len() - 1));
+                            vertices.len() - 1
+                        }
+                    };
                     indices.push(cut);
                 }
             }
@@ -124,8 +138,21 @@ impl ConvexPolyhedron {
             }
         }
 
-        half_edge_faces(edges, faces, indices);
-        walker.collect_boundary(faces, indices, edges);
+        // The new vertices on the plane: kept ones within eps of it, then
+        // every cut point.
+        on_plane.clear();
+        on_plane.extend(
+            self.vertices.iter().zip(side.iter()).filter(|&(_, &s)| s != Side::Outside).map(|(_, &s)| s == Side::On),
+        );
+        on_plane.resize(vertices.len(), true);
+        walker.collect_cap_boundary(faces, indices, on_plane);
+        #[cfg(test)]
+        if reference {
+            half_edge_faces(edges, faces, indices);
+            walker.collect_boundary(faces, indices, edges);
+        }
+        #[cfg(not(test))]
+        let _ = edges;
         walker.walk(vertices.len(), |cycle| {
             let start = indices.len();
             indices.extend_from_slice(cycle);
@@ -218,6 +245,37 @@ impl LoopWalker {
                 if !edge_faces.contains_key(&(b, a)) {
                     self.boundary.push((b, a));
                 }
+            }
+        }
+    }
+
+    /// Collects the boundary edges of the faces left by a clip, where
+    /// `on_plane` marks the vertices on the clipping plane.
+    ///
+    /// Only an edge with both ends on the plane can lack its reverse: the
+    /// clip keeps every face with a vertex strictly inside, and such a
+    /// vertex's edges (to a kept neighbour or to the cut point on the edge
+    /// towards an outside one) appear reversed in the face across, which
+    /// meets the same vertex and the same shared cut point. So the few edges
+    /// along the plane are matched among themselves, in the faces' order,
+    /// which finds exactly the edges (and the order) a lookup of every edge's
+    /// reverse in all faces would.
+    pub(super) fn collect_cap_boundary(&mut self, faces: &[FaceSpan], indices: &[usize], on_plane: &[bool]) {
+        let Self { boundary, targets: along, .. } = self;
+        // `along` holds the plane edges as pairs `a, b`, flattened.
+        along.clear();
+        for face in faces {
+            for (a, b) in loop_edges(&indices[face.start..face.end]) {
+                if on_plane[a] && on_plane[b] {
+                    along.extend([a, b]);
+                }
+            }
+        }
+        boundary.clear();
+        for edge in along.chunks_exact(2) {
+            let (a, b) = (edge[0], edge[1]);
+            if !along.chunks_exact(2).any(|e| e[0] == b && e[1] == a) {
+                boundary.push((b, a));
             }
         }
     }

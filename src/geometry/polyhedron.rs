@@ -1041,6 +1041,62 @@ mod tests {
         assert!(loops(&cube).is_empty());
     }
 
+    /// The clip's cap boundary from plane edges alone equals the reference
+    /// (every edge's reverse looked up in all faces), bit for bit, over
+    /// random cuts: planes through vertices and along faces (on-plane
+    /// vertices and edges), thick tolerances, slivers.
+    #[test]
+    fn cap_boundary_fast_path_equals_reference() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut fast, mut reference) = (ClipWorkspace::default(), ClipWorkspace::default());
+        reference.reference_boundary = true;
+        let mut cuts = 0;
+        for _ in 0..300 {
+            let mut body = unit_cube();
+            for _ in 0..12 {
+                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+                let Some(n) = n.try_normalize() else { continue };
+                // Through a vertex, through a face's centre, or anywhere.
+                let k = (random() * body.vertices().len() as f64) as usize % body.vertices().len().max(1);
+                let through = match (random() * 3.0) as usize {
+                    0 => body.vertices()[k],
+                    1 => body.centroid(),
+                    _ => body.centroid() + n * (random() - 0.5) * 0.5,
+                };
+                let plane = if random() < 0.3 {
+                    // Through an edge: both its ends on the plane, the edge
+                    // shared by two faces that may both stay.
+                    let face = body.face(k % body.face_count()).expect("a face");
+                    let (a, b) = face.edges().next().expect("an edge");
+                    let (va, vb) = (body.vertices()[a], body.vertices()[b]);
+                    match (vb - va).cross(n).try_normalize() {
+                        Some(normal) => Plane::from_point_normal(va, normal),
+                        None => continue,
+                    }
+                } else {
+                    Plane::from_point_normal(through, n)
+                };
+                let eps = [1e-9, 1e-3, 0.05][(random() * 3.0) as usize % 3];
+                let (mut a, mut b) = (ConvexPolyhedron::empty(), ConvexPolyhedron::empty());
+                body.clip_into(&plane, eps, &mut a, &mut fast);
+                body.clip_into(&plane, eps, &mut b, &mut reference);
+                assert_eq!(a, b);
+                cuts += 1;
+                if a.is_empty() {
+                    break;
+                }
+                body = a;
+            }
+        }
+        assert!(cuts > 1000);
+    }
+
     #[test]
     fn repeated_clipping_stays_closed() {
         // Many planes through nearly the same line: near-degenerate cuts.
