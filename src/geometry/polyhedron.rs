@@ -615,9 +615,9 @@ impl ConvexPolyhedron {
             new_index[i] = 0;
         }
         let mut used = 0;
-        for i in 0..self.vertices.len() {
-            if new_index[i] != usize::MAX {
-                new_index[i] = used;
+        for (i, slot) in new_index.iter_mut().enumerate() {
+            if *slot != usize::MAX {
+                *slot = used;
                 self.vertices[used] = self.vertices[i];
                 used += 1;
             }
