@@ -194,15 +194,16 @@ impl ViewCache {
 }
 
 thread_local! {
-    static WORKSPACE: Cell<SolveWorkspace> = Cell::new(SolveWorkspace::new());
+    /// Boxed, so that lending it out moves a pointer, not the buffers' headers.
+    static WORKSPACE: Cell<Option<Box<SolveWorkspace>>> = const { Cell::new(None) };
 }
 
 /// Runs `f` with this thread's workspace. A nested call (the workspace is
 /// then out in use) or a call while the thread shuts down gets a fresh one.
 pub(crate) fn with_workspace<R>(f: impl FnOnce(&mut SolveWorkspace) -> R) -> R {
-    let mut workspace = WORKSPACE.try_with(Cell::take).unwrap_or_default();
+    let mut workspace = WORKSPACE.try_with(Cell::take).ok().flatten().unwrap_or_default();
     let result = f(&mut workspace);
     // Fails only while the thread shuts down; the buffers are then dropped.
-    let _ = WORKSPACE.try_with(|cell| cell.set(workspace));
+    let _ = WORKSPACE.try_with(|cell| cell.set(Some(workspace)));
     result
 }
