@@ -611,8 +611,16 @@ impl ConvexPolyhedron {
         }
         new_index.clear();
         new_index.resize(self.vertices.len(), usize::MAX);
+        let mut marked = 0;
         for &i in &self.indices {
-            new_index[i] = 0;
+            if new_index[i] == usize::MAX {
+                new_index[i] = 0;
+                marked += 1;
+            }
+        }
+        if marked == self.vertices.len() {
+            // Every vertex used: the numbering stays as it is.
+            return;
         }
         let mut used = 0;
         for (i, slot) in new_index.iter_mut().enumerate() {
