@@ -73,9 +73,10 @@ fn repeated_calls_do_not_grow_memory() {
             .unwrap();
         std::hint::black_box(&out);
     });
-    if !cfg!(feature = "rayon") {
-        assert_eq!(per_call, 0.0, "all-lights extraction into reused buffers allocates after warm-up");
-    }
+    // Rayon's job queue allocates a block now and then (measured: 3 in 200
+    // calls); a per-call allocation of the extraction would be >= 1.
+    let allowed = if cfg!(feature = "rayon") { 0.1 } else { 0.0 };
+    assert!(per_call <= allowed, "all-lights extraction into reused buffers allocates {per_call} per call");
     let mut one = Samples::from_readback(&problems[1], &readback, 1, &SampleOptions::default()).unwrap();
     let per_call = steady_state("one-light extraction into reused samples", || {
         for (bit, problem) in problems.iter().enumerate() {
