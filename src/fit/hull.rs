@@ -99,9 +99,13 @@ fn discard_interior(points: &mut Vec<DVec2>) {
     if n < 3 {
         return;
     }
-    let corners = &corners[..n];
+    let mut edges = [(DVec2::ZERO, DVec2::ZERO); 8];
+    for (i, edge) in edges[..n].iter_mut().enumerate() {
+        *edge = (corners[i], corners[(i + 1) % n]);
+    }
+    let edges = &edges[..n];
     let strictly_inside = |p: &DVec2| {
-        (0..n).map(|i| (corners[i], corners[(i + 1) % n])).all(|(a, b)| {
+        edges.iter().all(|&(a, b)| {
             let (ab, ap) = (b - a, *p - a);
             let cross = ab.x * ap.y - ab.y * ap.x;
             cross > 1e-12 * (ab.x.abs() + ab.y.abs()) * (ap.x.abs() + ap.y.abs())
