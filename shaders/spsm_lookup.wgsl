@@ -25,8 +25,17 @@
 // packing's own error bound on the extrapolated plane.
 
 // Group 1 is the mode's maps (src/render/lookup.rs): binding 0 the depth
-// array (the consistent minimum depth, unused here), binding 1 the texels.
+// array (the consistent minimum depth, squeezed by spsm_depth_key in
+// spsm_pass.wgsl; bound as unfilterable float), binding 1 the texels.
+@group(1) @binding(0) var spsm_depths: texture_2d_array<f32>;
 @group(1) @binding(1) var spsm_texels: texture_2d_array<u32>;
+
+// The consistent minimum depth the pass stored for texel `k` (inside the
+// map): the inverse of spsm_depth_key, exact to f32 (no packing error).
+fn spsm_min_depth_at(light: Light, k: vec2<i32>) -> f32 {
+    let s = 2.0 * textureLoad(spsm_depths, k, light.layer, 0).x - 1.0;
+    return s / max(1.0 - abs(s), 1e-30);
+}
 
 fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
     if any(k < vec2<i32>(0)) || any(k >= vec2<i32>(light.map_size)) {
@@ -35,21 +44,29 @@ fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
         t.centre = vec2<f32>(k) + 0.5;
         return t;
     }
-    return spsm_decode(textureLoad(spsm_texels, k, light.layer, 0), k, light.map_size);
+    return spsm_decode_shape(textureLoad(spsm_texels, k, light.layer, 0), k);
+}
+
+// `t`, loaded from texel `k` by spsm_load, with its derivatives.
+fn spsm_slopes(light: Light, t: SpsmTexel, k: vec2<i32>) -> SpsmTexel {
+    if t.kind != 0u {
+        return t;
+    }
+    return spsm_with_slopes(t, textureLoad(spsm_texels, k, light.layer, 0), light.map_size);
 }
 
 // Consistent depth test of a whole texel: its triangle's minimum depth over
-// the part of the texel it covers is in front of p.
-fn spsm_texel_blocks(t: SpsmTexel, zeta: f32) -> bool {
+// the part of the texel it covers (read from the depth array, as the pass
+// computed it from the unpacked triangle; session 3: it was recomputed here
+// from the packed one, nine polygon clips per lookup) is in front of p.
+// `slack` is added to the bias: with SPSM_TOLERANCE, half the own texel's
+// derivative quantization step (before session 3 each neighbour's own,
+// decoded for all nine; the own texel's keeps the figures and the cost down).
+fn spsm_texel_blocks(light: Light, t: SpsmTexel, k: vec2<i32>, zeta: f32, slack: f32) -> bool {
     if t.kind == 2u {
         return false;
     }
-    if t.kind == 1u {
-        return t.depth < zeta - SPSM_BIAS;
-    }
-    let lowest = spsm_min_depth(t.v0, t.v1, t.v2, t.centre, t.depth, t.gradient, 3.0e38);
-    let tolerance = SPSM_TOLERANCE * 0.5 * (t.gradient_error.x + t.gradient_error.y);
-    return lowest < zeta - SPSM_BIAS - tolerance;
+    return spsm_min_depth_at(light, k) < zeta - SPSM_BIAS - select(0.0, slack, t.kind == 0u);
 }
 
 // Outward unit normal of edge a -> b of a triangle with orientation `orient`.
@@ -228,7 +245,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let p = m.xy;
     let k = map_texel(light, p);
     let zeta = m.z;
-    let own = spsm_load(light, k);
+    let own = spsm_slopes(light, spsm_load(light, k), k);
     if own.kind == 2u {
         return false;
     }
@@ -250,22 +267,24 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     // Without SPSM_THIN (i16's rules): any neighbour's stored surface through
     // p means lit, and no own-plane rule.
     let own_clear = !SPSM_THIN || own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
+    let pattern_slack = SPSM_TOLERANCE * 0.5 * (own.gradient_error.x + own.gradient_error.y);
     var texels: array<SpsmTexel, 9>;
     var pattern = 0u;
     var on_surface = SPSM_THIN && own_clear && own_plane.x <= zeta + own_slack;
     for (var i = 0u; i < 9u; i++) {
         var t = own;
+        let ki = k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1);
         if i != 4u {
-            t = spsm_load(light, k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1));
+            t = spsm_load(light, ki);
             if t.kind == 0u && spsm_inside(t, p) {
-                let plane = spsm_plane_at(t, p);
+                let plane = spsm_plane_at(spsm_slopes(light, t, ki), p);
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {
                     return true;
                 }
                 on_surface = on_surface || own_clear;
             }
         }
-        if spsm_texel_blocks(t, zeta) {
+        if spsm_texel_blocks(light, t, ki, zeta, pattern_slack) {
             pattern |= 1u << i;
         }
         texels[i] = t;

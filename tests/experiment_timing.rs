@@ -36,7 +36,8 @@ fn timing_runs_every_pipeline_in_paired_rounds() {
         assert!(estimate.interval[0] <= estimate.ratio && estimate.ratio <= estimate.interval[1]);
     }
     let md = experiment::timing_markdown(&rows);
-    assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 3 | 128²")).count(), 2 + 8);
+    assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 3 | 128²")).count(), 2 + 10);
+    assert!(md.contains("(focused + SPSM) / focused: cells median"));
     assert!(md.contains("scene-optimized / focused: cells median"));
     assert!(md.contains("over 4 paired rounds"));
     assert!(!md.contains("GPU shadow"), "no GPU columns without GPU stages");
