@@ -147,56 +147,75 @@ fn spsm_silhouette(pattern: u32) -> vec3<f32> {
     return vec3<f32>(-sin(theta), cos(theta), 1.0);
 }
 
+// The nearest boundary vertex on each side of p along the tangent so far:
+// (t, d) on the left (t <= 0) and right (t >= 0), and whether found.
+struct SpsmSideState {
+    left: vec2<f32>,
+    right: vec2<f32>,
+    found: vec2<bool>,
+}
+
+// Vertex `v` (between `prev` and `next` of a triangle with orientation
+// `orient`) offered to the side state: kept when it faces `n`, lies within
+// two texels of p along the tangent and is nearer than the side's current
+// one (near-ties go to the vertex further towards the free side).
+fn spsm_side_vertex(s: SpsmSideState, prev: vec2<f32>, v: vec2<f32>, next: vec2<f32>, orient: f32, p: vec2<f32>, n: vec2<f32>) -> SpsmSideState {
+    var out = s;
+    let normal = spsm_edge_normal(prev, v, orient) + spsm_edge_normal(v, next, orient);
+    if orient != 0.0 && dot(normal, n) <= 0.0 {
+        return out;
+    }
+    let q = v - p;
+    let tv = dot(q, vec2<f32>(-n.y, n.x));
+    let dv = dot(q, n);
+    if abs(tv) > 2.0 {
+        return out;
+    }
+    if tv <= 0.0 && (tv > out.left.x + 0.01 || (tv > out.left.x - 0.01 && dv > out.left.y)) {
+        out.left = vec2<f32>(tv, dv);
+        out.found.x = true;
+    }
+    if tv >= 0.0 && (tv < out.right.x - 0.01 || (tv < out.right.x + 0.01 && dv > out.right.y)) {
+        out.right = vec2<f32>(tv, dv);
+        out.found.y = true;
+    }
+    return out;
+}
+
 // One silhouette side: the occluders' boundary vertices facing `n` (the
 // free side) within two texels along the tangent are projected on it, and
 // the piecewise-linear phi through the nearest one on each side of p
 // decides: 1 shadowed when phi(t(p)) reaches past p towards `n`, 0 lit,
-// 2 when no boundary vertex was found.
-fn spsm_side(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>, n: vec2<f32>) -> u32 {
-    let tangent = vec2<f32>(-n.y, n.x);
-    // Nearest boundary vertex on each side of p along the tangent: (t, d).
-    var left = vec2<f32>(-1e30, 0.0);
-    var right = vec2<f32>(1e30, 0.0);
-    var found = vec2<bool>(false, false);
+// 2 when no boundary vertex was found. The blocked texels of the 3x3
+// around `k` are loaded again here (session 3: a private array of the nine
+// decoded texels, dynamically indexed, made the lookup several times
+// slower on llvmpipe).
+fn spsm_side(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>, n: vec2<f32>) -> u32 {
+    var s: SpsmSideState;
+    s.left = vec2<f32>(-1e30, 0.0);
+    s.right = vec2<f32>(1e30, 0.0);
+    s.found = vec2<bool>(false, false);
     for (var i = 0u; i < 9u; i++) {
-        let t = texels[i];
-        if (pattern & (1u << i)) == 0u || t.kind != 0u {
+        if (pattern & (1u << i)) == 0u {
             continue;
         }
-        var v = array<vec2<f32>, 3>(t.v0, t.v1, t.v2);
-        let orient = sign(spsm_cross(t.v1 - t.v0, t.v2 - t.v0));
-        for (var k = 0u; k < 3u; k++) {
-            let prev = v[(k + 2u) % 3u];
-            let next = v[(k + 1u) % 3u];
-            let normal = spsm_edge_normal(prev, v[k], orient) + spsm_edge_normal(v[k], next, orient);
-            if orient != 0.0 && dot(normal, n) <= 0.0 {
-                continue;
-            }
-            let q = v[k] - p;
-            let tv = dot(q, tangent);
-            let dv = dot(q, n);
-            if abs(tv) > 2.0 {
-                continue;
-            }
-            // Nearest in t; near-ties go to the vertex further towards the free side.
-            if tv <= 0.0 && (tv > left.x + 0.01 || (tv > left.x - 0.01 && dv > left.y)) {
-                left = vec2<f32>(tv, dv);
-                found.x = true;
-            }
-            if tv >= 0.0 && (tv < right.x - 0.01 || (tv < right.x + 0.01 && dv > right.y)) {
-                right = vec2<f32>(tv, dv);
-                found.y = true;
-            }
+        let t = spsm_load(light, k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1));
+        if t.kind != 0u {
+            continue;
         }
+        let orient = sign(spsm_cross(t.v1 - t.v0, t.v2 - t.v0));
+        s = spsm_side_vertex(s, t.v2, t.v0, t.v1, orient, p, n);
+        s = spsm_side_vertex(s, t.v0, t.v1, t.v2, orient, p, n);
+        s = spsm_side_vertex(s, t.v1, t.v2, t.v0, orient, p, n);
     }
     var phi: f32;
-    if found.x && found.y {
-        let span = right.x - left.x;
-        phi = select(max(left.y, right.y), mix(left.y, right.y, -left.x / span), span > 1e-6);
-    } else if found.x {
-        phi = left.y;
-    } else if found.y {
-        phi = right.y;
+    if s.found.x && s.found.y {
+        let span = s.right.x - s.left.x;
+        phi = select(max(s.left.y, s.right.y), mix(s.left.y, s.right.y, -s.left.x / span), span > 1e-6);
+    } else if s.found.x {
+        phi = s.left.y;
+    } else if s.found.y {
+        phi = s.right.y;
     } else {
         return 2u;
     }
@@ -204,7 +223,7 @@ fn spsm_side(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>, n: vec2<f3
     return select(0u, 1u, phi >= 0.0);
 }
 
-fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool {
+fn spsm_recover(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>) -> bool {
     if pattern == 0u {
         return false;
     }
@@ -217,19 +236,23 @@ fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool
         // One tangent only: no direction, the own texel's depth test.
         return centre;
     }
-    var normals = array<vec2<f32>, 4>(estimate.xy, -estimate.xy, vec2<f32>(0.0), vec2<f32>(0.0));
     var count = 1u;
     if estimate.z == 1.0 {
         count = 2u;
     } else if estimate.z == 2.0 {
-        normals = array<vec2<f32>, 4>(vec2<f32>(1.0, 0.0), vec2<f32>(-1.0, 0.0), vec2<f32>(0.0, 1.0), vec2<f32>(0.0, -1.0));
         count = 4u;
     }
     // Several tangent estimates: shadowed only where every one says so (the
     // paper's intersection); a side without boundary vertices defers to the
-    // own texel's consistent depth test.
+    // own texel's consistent depth test. Estimate j: the normal, its
+    // opposite (a thin band), or the four axis directions (a blob).
     for (var j = 0u; j < count; j++) {
-        let side = spsm_side(texels, pattern, p, normals[j]);
+        var n = select(estimate.xy, -estimate.xy, j == 1u);
+        if estimate.z == 2.0 {
+            let sign_j = select(1.0, -1.0, (j & 1u) != 0u);
+            n = select(vec2<f32>(sign_j, 0.0), vec2<f32>(0.0, sign_j), j >= 2u);
+        }
+        let side = spsm_side(light, k, pattern, p, n);
         if side == 0u || (side == 2u && !centre) {
             return false;
         }
@@ -268,7 +291,6 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     // p means lit, and no own-plane rule.
     let own_clear = !SPSM_THIN || own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
     let pattern_slack = SPSM_TOLERANCE * 0.5 * (own.gradient_error.x + own.gradient_error.y);
-    var texels: array<SpsmTexel, 9>;
     var pattern = 0u;
     var on_surface = SPSM_THIN && own_clear && own_plane.x <= zeta + own_slack;
     for (var i = 0u; i < 9u; i++) {
@@ -287,10 +309,9 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         if spsm_texel_blocks(light, t, ki, zeta, pattern_slack) {
             pattern |= 1u << i;
         }
-        texels[i] = t;
     }
     if on_surface {
         return false;
     }
-    return spsm_recover(texels, pattern, p);
+    return spsm_recover(light, k, pattern, p);
 }
