@@ -8,6 +8,15 @@
 //! cargo run --release --features cli --example spsm_edge -- [--preset quick|default]
 //!     [--config 1] [--method optimized]
 //! ```
+//!
+//! With `--trio FILE.png` it instead writes the README's image trio: the
+//! configuration's matrix of `--method` (default `focused`), solved for the
+//! preset's view, seen through a narrow camera (`--fov`, default 5°;
+//! `--screen`, default 256) from the same eye, aimed at the screen window
+//! where the standard lookup misclassifies most, with
+//! the standard lookup, the SPSM lookup and the ray-cast truth side by side
+//! (the experiment's error overlay: truth's shading, false shadow red,
+//! false lit blue), and prints the close-up's counts.
 
 #[path = "support/mod.rs"]
 mod support;
@@ -34,6 +43,13 @@ fn run() -> Result<(), String> {
         other => return Err(format!("unknown preset {other:?}")),
     };
     let index: usize = args.parse("--config", 1)?;
+    if let Some(path) = args.value("--trio") {
+        let name = args.value("--method").unwrap_or("focused");
+        let base = MethodKind::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
+        let fov: f64 = args.parse("--fov", 5.0)?;
+        let screen: u32 = args.parse("--screen", 256)?;
+        return trio(preset, index, base, (fov, screen), path);
+    }
     let name = args.value("--method").unwrap_or("optimized");
     let base = MethodKind::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
     let mut config = ExperimentConfig::preset(preset);
@@ -128,4 +144,71 @@ fn quantiles(v: &mut [f64]) -> String {
 fn print_w(m: &LightMatrix) {
     let row = |r: usize| m.clip_from_world.row(r);
     println!("  clip z row {:?}\n  clip w row {:?}", row(2), row(3));
+}
+
+/// The README's trio (see the module docs).
+fn trio(preset: Preset, index: usize, base: MethodKind, (fov, screen): (f64, u32), path: &str) -> Result<(), String> {
+    let mut config = ExperimentConfig::preset(preset);
+    config.methods = vec![base];
+    config.coverage_samples = 0;
+    let (device, queue, _) = support::gpu()?;
+    // The matrix, solved for the preset's whole view.
+    let (matrix, light, window, eye) = {
+        let mut runner = Runner::new(&config, &device, &queue).map_err(|e| e.to_string())?;
+        let outcome = runner.run_config(index).map_err(|e| e.to_string())?;
+        let m = outcome.results[0].1.matrix.ok_or("the method failed")?;
+        let truth = runner.truths(outcome.light).map_err(|e| e.to_string())?.0.ok_or("no ray-cast truth")?;
+        let masks = runner.masks_with(&m, base.lookup()).map_err(|e| e.to_string())?;
+        // The 16x16 window with the most misclassified pixels.
+        let (w, h) = (truth.width as usize, truth.height as usize);
+        let wrong = |i: usize| {
+            truth.visible(i) && truth.facing[i] & 1 == 1 && (truth.shadow[i] ^ masks.shadow[i]) & 1 == 1
+        };
+        let mut best = (0, 0, 0);
+        for y in (0..h.saturating_sub(16)).step_by(4) {
+            for x in (0..w.saturating_sub(16)).step_by(4) {
+                let n = (y..y + 16).flat_map(|yy| (x..x + 16).map(move |xx| yy * w + xx)).filter(|&i| wrong(i)).count();
+                if n > best.0 {
+                    best = (n, x + 8, y + 8);
+                }
+            }
+        }
+        let i = best.2 * w + best.1;
+        let ndc = DVec3::new(
+            (best.1 as f64 + 0.5) / w as f64 * 2.0 - 1.0,
+            1.0 - (best.2 as f64 + 0.5) / h as f64 * 2.0,
+            f64::from(truth.depth[i]),
+        );
+        let target = runner.camera().clip_from_world().inverse().project_point3(ndc);
+        (m, outcome.light, target, runner.camera().eye())
+    };
+    // The close-up: same eye, narrow field of view, the same matrix.
+    let close =
+        ExperimentConfig { eye: Some(eye), target: Some(window), fov_y_degrees: fov, screen, ..config.clone() };
+    let mut runner = Runner::new(&close, &device, &queue).map_err(|e| e.to_string())?;
+    let truth = runner.truths(light).map_err(|e| e.to_string())?.0.ok_or("no ray-cast truth")?;
+    let mut panels = Vec::new();
+    for method in [base, base.with_spsm()] {
+        let masks = runner.masks_with(&matrix, method.lookup()).map_err(|e| e.to_string())?;
+        let c = Counts::compare(&masks, &truth);
+        println!(
+            "{}: {} misclassified of {} (false shadow {}, false lit {})",
+            method.name(),
+            c.misclassified(),
+            c.counted,
+            c.false_shadow,
+            c.false_lit
+        );
+        panels.push(lixel::experiment::error_overlay(&masks, &truth));
+    }
+    panels.push(lixel::experiment::error_overlay(&truth, &truth));
+    let (w, h) = (truth.width, truth.height);
+    let gap = 4;
+    let mut out = image::RgbaImage::from_pixel(3 * w + 2 * gap, h, image::Rgba([255, 255, 255, 255]));
+    for (k, panel) in panels.iter().enumerate() {
+        image::imageops::overlay(&mut out, panel, i64::from(k as u32 * (w + gap)), 0);
+    }
+    out.save(path).map_err(|e| format!("{path}: {e}"))?;
+    println!("target {window:?}, eye {eye:?}, fov {fov} deg; wrote {path}");
+    Ok(())
 }
