@@ -2,12 +2,16 @@
 //! with the optimizer cadence of the paper (analysis pass every 3 frames,
 //! each light looked up in a small focused map every 5th pass, asynchronous
 //! readback). Writes PNG frames and a per-frame timing CSV (GPU timestamps
-//! where available).
+//! where available). With `--flicker` it also counts each frame's
+//! misclassified pixels against a ray-cast truth and the flicker between
+//! consecutive frames (pixels whose shadow bit changes while the truth's does
+//! not; `lixel::mesh::Flicker`), at the cost of a second camera pass and a
+//! ray cast per frame (frame times then include them).
 //!
 //! ```text
 //! cargo run --release --example frame_loop -- [--preset tiny|small|default] [--obj file.obj]
-//!     [--method optimized|focused|lispsm] [--lights 2] [--map 1024] [--size 750]
-//!     [--frames 60] [--png-every 10] [--in-flight 2] [--out target/frame_loop]
+//!     [--method optimized|focused|focused-snapped|lispsm] [--lights 2] [--map 1024] [--size 750]
+//!     [--frames 60] [--png-every 10] [--in-flight 2] [--flicker] [--out target/frame_loop]
 //! ```
 
 #[path = "support/mod.rs"]
@@ -40,6 +44,7 @@ fn run() -> Result<(), String> {
         frames_per_loop: args.parse("--frames-per-loop", 240)?,
         in_flight: args.parse("--in-flight", 2)?,
         png: Some((args.parse("--png-every", 10)?, out.clone())),
+        flicker: args.flag("--flicker"),
     };
     let (device, queue, info) = support::gpu()?;
     eprintln!("adapter: {} ({:?}); {} triangles", info.name, info.backend, scene.triangle_count());
@@ -88,6 +93,20 @@ fn run() -> Result<(), String> {
         "readbacks               {} submitted, {} taken, {} refused (ring full), {} discarded",
         stats.submitted, stats.taken, stats.refused, stats.discarded
     );
+    if config.flicker {
+        let flicker =
+            records.iter().filter_map(|r| r.flicker).fold(lixel::mesh::Flicker::default(), |a, b| a.merged(b));
+        let transitions = records.iter().filter(|r| r.flicker.is_some()).count();
+        println!(
+            "flicker                 {:.3}% of truth-stable pixels flip per frame ({} flips over {transitions} frame pairs, all lights)",
+            100.0 * flicker.share(),
+            flicker.flipped
+        );
+        println!(
+            "misclassified           {} px per frame (all lights, ray-cast truth)",
+            show(mean(&|r| r.misclassified.map(|m| m as f64)))
+        );
+    }
     println!("wrote {} and PNG frames to {}", csv_path.display(), out.display());
     Ok(())
 }

@@ -10,11 +10,11 @@ use clap::builder::TypedValueParser as _;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::{DVec3, UVec2};
 use lixel::experiment::{
-    self, ExperimentConfig, LightKind, MergeOptions, MethodKind, Preset, Progress, SceneSource, Shard, TimingOptions,
+    self, ExperimentConfig, LightKind, MergeOptions, MethodSpec, Preset, Progress, SceneSource, Shard, TimingOptions,
     Truth,
 };
 use lixel::mesh::{SceneOptions, UpAxis};
-use lixel::render::Gpu;
+use lixel::render::{Gpu, ShadowLookup};
 use lixel::score::{badness_stats, plane_samples};
 use lixel::{Aabb, Camera, Light, Parameterization, PsmOptions, SceneBounds, ShadowMapSize, ShadowProblem};
 
@@ -51,15 +51,16 @@ enum Command {
     View(Box<view_cli::ViewArgs>),
 }
 
-/// Which shadow lookup the experiment's methods use.
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum LookupArg {
-    /// The methods as named (a `+spsm` suffix picks sub-pixel shadow maps).
-    Standard,
-    /// Every method with the sub-pixel shadow-map lookup (`<method>+spsm`).
-    Spsm,
-    /// Every method twice: as named and with `+spsm`.
-    Both,
+/// A `--lookup` value: `standard` (the depth compare) or a lookup mode's
+/// name ([`ShadowLookup::name`]).
+fn parse_lookup(name: &str) -> Result<ShadowLookup, String> {
+    match name.trim() {
+        "standard" => Ok(ShadowLookup::DepthCompare),
+        other => ShadowLookup::parse(other).ok_or_else(|| {
+            let names: Vec<&str> = ShadowLookup::ALL.iter().map(|l| l.name()).collect();
+            format!("unknown lookup {other:?}; valid: standard, {}", names.join(", "))
+        }),
+    }
 }
 
 #[derive(clap::Args)]
@@ -98,7 +99,7 @@ struct ExperimentArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     map: Option<u32>,
     /// Comma-separated methods: normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized, optimized-argmin,
-    /// each optionally with `+spsm` (sub-pixel shadow-map lookup), e.g. focused+spsm.
+    /// each optionally with a lookup suffix, e.g. focused+spsm (sub-pixel shadow maps).
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Ground truth.
@@ -107,9 +108,10 @@ struct ExperimentArgs {
     /// Configurations for the resolution equivalence (0 turns it off).
     #[arg(long)]
     equivalence: Option<usize>,
-    /// Shadow lookup applied to every method (default: as named in --methods).
-    #[arg(long, value_enum)]
-    lookup: Option<LookupArg>,
+    /// Comma-separated shadow lookups (standard, spsm, ...): every method runs once with each,
+    /// e.g. `--lookup standard,spsm` (default: each method's lookup as named in --methods).
+    #[arg(long, value_delimiter = ',', value_parser = parse_lookup)]
+    lookup: Option<Vec<ShadowLookup>>,
     /// Sub-samples per pixel of the coverage truth behind
     /// `mean_visibility_error` (8, 16, 32; 0 turns it off; default 32 for
     /// --preset quick, 0 otherwise: it costs 15-25 times the ray-cast truth).
@@ -285,22 +287,19 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
         c.methods = names
             .iter()
             .map(|n| {
-                MethodKind::parse(n.trim()).ok_or_else(|| {
-                    let valid: Vec<&str> = MethodKind::ALL.iter().map(|m| m.name()).collect();
-                    format!("--methods: unknown method {n:?}; valid methods: {}", valid.join(", "))
+                MethodSpec::parse(n.trim()).ok_or_else(|| {
+                    format!("--methods: unknown method {n:?}; valid methods: {}", MethodSpec::valid_names())
                 })
             })
             .collect::<Result<_, _>>()?;
     }
-    match args.lookup {
-        None | Some(LookupArg::Standard) => {}
-        Some(LookupArg::Spsm) => c.methods = c.methods.iter().map(|m| m.with_spsm()).collect(),
-        Some(LookupArg::Both) => {
-            let spsm: Vec<MethodKind> = c.methods.iter().map(|m| m.with_spsm()).collect();
-            c.methods.extend(spsm);
-            let mut seen = std::collections::HashSet::new();
-            c.methods.retain(|m| seen.insert(*m));
-        }
+    if let Some(lookups) = &args.lookup {
+        let mut seen = std::collections::HashSet::new();
+        c.methods = lookups
+            .iter()
+            .flat_map(|&l| c.methods.iter().map(move |m| m.with_lookup(l)))
+            .filter(|m| seen.insert(*m))
+            .collect();
     }
     if let Some(t) = args.truth {
         c.truth = t;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::DVec3;
-use lixel::experiment::{LightKind, MethodKind, Preset};
+use lixel::experiment::{LightKind, MethodSpec, Preset};
 use lixel::view::{self, CameraPath, Overlays, ViewConfig, Viewer, WindowOptions};
 
 use crate::{gpu, parse_vec3, BackendArg, SceneFileArgs};
@@ -78,9 +78,8 @@ fn config(args: &ViewArgs) -> Result<ViewConfig, String> {
     e.screen = args.screen.unwrap_or(e.screen);
     e.eye = args.eye.or(e.eye);
     e.target = args.target.or(e.target);
-    c.method = MethodKind::parse(args.method.trim()).ok_or_else(|| {
-        let valid: Vec<&str> = MethodKind::ALL.iter().map(|m| m.name()).collect();
-        format!("--method: unknown method {:?}; valid methods: {}", args.method, valid.join(", "))
+    c.method = MethodSpec::parse(args.method.trim()).ok_or_else(|| {
+        format!("--method: unknown method {:?}; valid methods: {}", args.method, MethodSpec::valid_names())
     })?;
     c.lights = args.lights;
     c.overlays = Overlays::parse(&args.overlay).map_err(|e| e.to_string())?;

@@ -5,7 +5,7 @@
 #[path = "render_common/mod.rs"]
 mod render_common;
 
-use lixel::experiment::{self, ExperimentConfig, MethodKind, Preset};
+use lixel::experiment::{self, ExperimentConfig, MethodSpec, Preset};
 
 fn config(out: &std::path::Path) -> ExperimentConfig {
     ExperimentConfig {
@@ -40,7 +40,7 @@ fn quick_preset_writes_a_consistent_report_deterministically_and_resumes() {
     assert!(header.starts_with("method,configs,mean_misclassified,total_misclassified,percent_more_than_optimized"));
     let summary_rows = csv_rows(&first.join("summary.csv"));
     assert_eq!(summary_rows.len(), c.methods.len());
-    for m in MethodKind::ALL {
+    for m in MethodSpec::ALL {
         assert!(summary_rows.iter().any(|r| r[0] == m.name()), "{} missing from summary.csv", m.name());
     }
     // mean_visibility_error (the coverage truth, 32 sub-samples): a share

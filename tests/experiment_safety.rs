@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use glam::DVec3;
-use lixel::experiment::{self, ExperimentConfig, ExperimentError, MethodKind, Preset, SceneSource, Truth};
+use lixel::experiment::{self, ExperimentConfig, ExperimentError, MethodSpec, Preset, SceneSource, Truth};
 use lixel::mesh::SceneOptions;
 
 fn tiny(out: &Path) -> ExperimentConfig {
@@ -21,7 +21,7 @@ fn tiny(out: &Path) -> ExperimentConfig {
         configs: 2,
         screen: 64,
         map: 64,
-        methods: vec![MethodKind::Normal, MethodKind::Focused],
+        methods: vec![MethodSpec::NORMAL, MethodSpec::FOCUSED],
         truth: Truth::RayCast,
         equivalence_configs: 0,
         out: out.to_path_buf(),

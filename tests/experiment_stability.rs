@@ -7,7 +7,7 @@
 mod render_common;
 
 use lixel::experiment::stability::{self, CameraPath};
-use lixel::experiment::{ExperimentConfig, MethodKind, Preset, SceneSource};
+use lixel::experiment::{ExperimentConfig, MethodSpec, Preset, SceneSource};
 
 fn tiny(out: &std::path::Path) -> ExperimentConfig {
     ExperimentConfig {
@@ -16,7 +16,7 @@ fn tiny(out: &std::path::Path) -> ExperimentConfig {
         map: 128,
         max_optimize_frames: 12,
         out: out.to_path_buf(),
-        methods: MethodKind::ALL.to_vec(),
+        methods: MethodSpec::ALL.to_vec(),
         ..ExperimentConfig::preset(Preset::Quick)
     }
 }
@@ -27,7 +27,7 @@ fn still_camera_has_zero_flicker_and_a_walk_writes_the_report() {
     let dir = std::env::temp_dir().join(format!("lixel-stability-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let config = tiny(&dir);
-    assert!(config.methods.contains(&MethodKind::FocusedSnapped) && config.methods.contains(&MethodKind::Optimized));
+    assert!(config.methods.contains(&MethodSpec::FOCUSED_SNAPPED) && config.methods.contains(&MethodSpec::OPTIMIZED));
 
     let rows = stability::measure(&config, &CameraPath::still(3), &device, &queue, &mut |_, _| {}).unwrap();
     assert_eq!(rows.len(), config.methods.len());

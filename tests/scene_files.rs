@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
 use glam::{DVec3, Quat, Vec3};
-use lixel::experiment::{ExperimentConfig, LightKind, MethodKind, Preset, Runner, SceneSource, Truth};
+use lixel::experiment::{ExperimentConfig, LightKind, MethodSpec, Preset, Runner, SceneSource, Truth};
 use lixel::mesh::{
     load_scene_file, primitives, Mesh, Repair, Role, SceneLoadError, SceneOptions, UpAxis, MAX_TRIANGLES,
 };
@@ -298,7 +298,7 @@ fn default_framing_of_a_model_counts_pixels_in_every_configuration() {
             configs: 20,
             screen: 64,
             map: 128,
-            methods: vec![MethodKind::Focused],
+            methods: vec![MethodSpec::FOCUSED],
             truth: Truth::RayCast,
             equivalence_configs: 0,
             out: dir.join("report"),

@@ -9,7 +9,7 @@ mod render_common;
 
 use std::process::Command;
 
-use lixel::experiment::{MethodKind, Preset, SceneSource};
+use lixel::experiment::{MethodSpec, Preset, SceneSource};
 use lixel::view::{Overlays, ViewConfig, Viewer, SCREENSHOT_FORMAT};
 
 /// The quick preset's scene, smaller: 128² pixels, 256² maps.
@@ -36,7 +36,7 @@ fn differing(a: &image::RgbaImage, b: &image::RgbaImage) -> usize {
 fn every_method_renders_its_default_view() {
     let Some(mut v) = viewer(config()) else { return };
     let mut shots = Vec::new();
-    for method in MethodKind::ALL {
+    for method in MethodSpec::ALL {
         v.set_method(method).unwrap();
         // Enough frames for the scene-optimized loop to take a few readbacks.
         let shot = v.screenshot(10, None).unwrap();
@@ -45,14 +45,14 @@ fn every_method_renders_its_default_view() {
     }
     // The methods' shadows differ: the views are not all the same picture.
     let (_, normal) = &shots[0];
-    let (_, optimized) = shots.iter().find(|(m, _)| *m == MethodKind::Optimized).unwrap();
+    let (_, optimized) = shots.iter().find(|(m, _)| *m == MethodSpec::OPTIMIZED).unwrap();
     assert!(differing(normal, optimized) > 20, "normal and optimized give the same picture");
 }
 
 #[test]
 fn overlays_change_the_picture() {
     let mut c = config();
-    c.method = MethodKind::Normal;
+    c.method = MethodSpec::NORMAL;
     c.experiment.map = 128;
     let Some(mut v) = viewer(c) else { return };
     let base = v.screenshot(2, None).unwrap();
@@ -88,7 +88,7 @@ fn overlays_change_the_picture() {
 #[test]
 fn samples_overlay_shows_the_optimizers_boundary_samples() {
     let mut c = config();
-    c.method = MethodKind::Optimized;
+    c.method = MethodSpec::OPTIMIZED;
     let Some(mut v) = viewer(c) else { return };
     // A few analysis passes (every 3 frames) and their readbacks.
     let base = v.screenshot(10, None).unwrap();
@@ -105,7 +105,7 @@ fn samples_overlay_shows_the_optimizers_boundary_samples() {
     let off = v.screenshot(1, None).unwrap();
     assert_eq!(magenta(&off), before, "turning the overlay off removes the crosses");
     // A method without analysis passes has no samples to show.
-    v.set_method(MethodKind::Focused).unwrap();
+    v.set_method(MethodSpec::FOCUSED).unwrap();
     v.screenshot(4, None).unwrap();
     assert!(v.boundary_samples().iter().all(Vec::is_empty));
 }
@@ -188,7 +188,7 @@ fn linear(srgb: u8) -> f64 {
 fn density_overlay_is_the_cpu_badness() {
     use lixel::mesh::raycast::Ray;
     let mut c = config();
-    c.method = MethodKind::LiSpsm;
+    c.method = MethodSpec::LISPSM;
     let scene = lixel::experiment::load_scene(&c.experiment.scene).unwrap();
     let Some(mut v) = viewer(c) else { return };
     let base = v.screenshot(1, None).unwrap();

@@ -145,9 +145,10 @@ pub fn parse_policy(name: &str) -> Result<lixel::render::LoopPolicy, String> {
     use lixel::Parameterization;
     match name {
         "focused" => Ok(LoopPolicy::Fixed(Parameterization::Focused)),
+        "focused-snapped" => Ok(LoopPolicy::Fixed(Parameterization::FocusedSnapped(Default::default()))),
         "lispsm" => Ok(LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default()))),
         "optimized" => Ok(LoopPolicy::Optimized),
-        other => Err(format!("unknown method {other:?} (focused, lispsm, optimized)")),
+        other => Err(format!("unknown method {other:?} (focused, focused-snapped, lispsm, optimized)")),
     }
 }
 
@@ -166,6 +167,10 @@ pub struct LoopConfig {
     pub in_flight: u64,
     /// Write `frame-NNNN.png` every this many frames into the directory.
     pub png: Option<(u64, std::path::PathBuf)>,
+    /// Also measure each frame against the ray-cast truth (misclassified
+    /// pixels, flicker since the previous frame). Costs a second camera pass
+    /// with masks and a ray cast per frame, so frame times include it.
+    pub flicker: bool,
 }
 
 /// What one frame did and cost.
@@ -187,10 +192,14 @@ pub struct FrameRecord {
     /// Shadow passes and the triangles they drew after per-object culling.
     pub shadow_passes: u32,
     pub shadow_triangles: u64,
+    /// With `LoopConfig::flicker`: misclassified pixels summed over the
+    /// lights, and the flicker since the previous frame (all lights).
+    pub misclassified: Option<u64>,
+    pub flicker: Option<lixel::mesh::Flicker>,
 }
 
 impl FrameRecord {
-    pub const CSV_HEADER: &'static str = "frame,wall_ms,solve_ms,encode_ms,gpu_shadow_ms,gpu_camera_ms,gpu_analysis_ms,gpu_total_ms,analysis_queued,analysis_skipped,readback_frame,latency_frames,latency_ready_ms,latency_taken_ms,matrices_updated,shadow_passes,shadow_triangles";
+    pub const CSV_HEADER: &'static str = "frame,wall_ms,solve_ms,encode_ms,gpu_shadow_ms,gpu_camera_ms,gpu_analysis_ms,gpu_total_ms,analysis_queued,analysis_skipped,readback_frame,latency_frames,latency_ready_ms,latency_taken_ms,matrices_updated,shadow_passes,shadow_triangles,misclassified,flicker_stable,flicker_flipped";
 
     pub fn csv_row(&self) -> String {
         let ms = |d: Option<std::time::Duration>| d.map_or(String::new(), |d| format!("{:.3}", d.as_secs_f64() * 1e3));
@@ -199,8 +208,9 @@ impl FrameRecord {
             self.readback.map_or((String::new(), String::new(), String::new(), String::new()), |r| {
                 (r.0.to_string(), r.1.to_string(), format!("{:.3}", r.2), format!("{:.3}", r.3))
             });
+        let opt = |v: Option<u64>| v.map_or(String::new(), |v| v.to_string());
         format!(
-            "{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.wall_ms,
             self.solve_ms,
@@ -217,7 +227,10 @@ impl FrameRecord {
             taken,
             self.matrices_updated,
             self.shadow_passes,
-            self.shadow_triangles
+            self.shadow_triangles,
+            opt(self.misclassified),
+            opt(self.flicker.map(|f| f.stable)),
+            opt(self.flicker.map(|f| f.flipped))
         )
     }
 }
@@ -228,7 +241,8 @@ pub fn run_loop(
     scene: &Scene,
     config: &LoopConfig,
 ) -> Result<Vec<FrameRecord>, String> {
-    use lixel::render::{LoopOptions, LoopView, ShadowLoop};
+    use lixel::mesh::{Flicker, RayCaster, ShadowMasks};
+    use lixel::render::{Frame, LoopOptions, LoopView, ShadowLoop};
     use lixel::ShadowMapSize;
     use std::time::Instant;
 
@@ -240,6 +254,8 @@ pub fn run_loop(
     let mut records: Vec<FrameRecord> = Vec::with_capacity(config.frames as usize);
     let mut submissions = std::collections::VecDeque::new();
     let mut previous_start: Option<Instant> = None;
+    let caster = config.flicker.then(|| RayCaster::new(scene));
+    let mut previous: Option<(ShadowMasks, ShadowMasks)> = None;
     for n in 0..config.frames {
         let start = Instant::now();
         if let (Some(prev), Some(last)) = (previous_start, records.last_mut()) {
@@ -270,6 +286,23 @@ pub fn run_loop(
         record.shadow_passes = report.shadow_passes;
         record.shadow_triangles = report.shadow_triangles;
         submissions.push_back(report.submission);
+
+        if let Some(caster) = &caster {
+            // The frame's matrices again, with masks, against the ray-cast truth.
+            let report = renderer
+                .render(&Frame { masks: true, ..Frame::new(&camera, &frame.matrices) })
+                .map_err(|e| e.to_string())?;
+            renderer.wait_for(&report.submission).map_err(|e| e.to_string())?;
+            let masks = renderer.read_masks().map_err(|e| e.to_string())?;
+            let truth = caster.trace_masks(&camera, &lights, config.size, config.size);
+            let lights = 0..lights.len() as u32;
+            record.misclassified = Some(lights.clone().filter_map(|l| masks.misclassified(&truth, l)).sum());
+            if let Some((prev, prev_truth)) = &previous {
+                let each = lights.map(|l| Flicker::between(l, prev, prev_truth, &masks, &truth));
+                record.flicker = Some(each.fold(Flicker::default(), Flicker::merged));
+            }
+            previous = Some((masks, truth));
+        }
 
         if let Some((every, dir)) = &config.png {
             if n % every == 0 {

@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::images::{error_overlay, Picture};
 use super::report::{self, Equivalence, Summary};
 use super::rows::ConfigRow;
-use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodKind, Runner};
+use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodSpec, Runner};
 
 /// How complete the rows of a report are.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -86,16 +86,16 @@ pub(super) fn equivalence_count(config: &ExperimentConfig) -> usize {
 /// The resolution-equivalence figures (empty when disabled).
 fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equivalence, ExperimentError> {
     let count = equivalence_count(config);
-    if count == 0 || !config.methods.contains(&MethodKind::Optimized) {
+    if count == 0 || !config.methods.contains(&MethodSpec::OPTIMIZED) {
         return Ok((Vec::new(), Vec::new()));
     }
     let mut ladder = Vec::new();
     for &size in &config.equivalence_ladder {
-        ladder.push((size, runner.mean_at_resolution(MethodKind::Focused, size, count)?));
+        ladder.push((size, runner.mean_at_resolution(MethodSpec::FOCUSED, size, count)?));
     }
     let mut result = Vec::new();
     for size in [400u32, 1024] {
-        let mean = runner.mean_at_resolution(MethodKind::Optimized, size, count)?;
+        let mean = runner.mean_at_resolution(MethodSpec::OPTIMIZED, size, count)?;
         result.push((size, mean, report::crossing(&ladder, mean)));
     }
     Ok((result, ladder))
@@ -146,7 +146,7 @@ fn extremes(
 mod tests {
     use super::*;
 
-    fn row(config: usize, method: MethodKind, counted: u64) -> ConfigRow {
+    fn row(config: usize, method: MethodSpec, counted: u64) -> ConfigRow {
         ConfigRow {
             config,
             method,
@@ -165,11 +165,11 @@ mod tests {
     #[test]
     fn zero_pixel_configurations_warn_and_an_all_zero_run_fails() {
         let mut warnings = Vec::new();
-        let some = [row(0, MethodKind::Normal, 0), row(1, MethodKind::Normal, 50), row(2, MethodKind::Normal, 0)];
+        let some = [row(0, MethodSpec::NORMAL, 0), row(1, MethodSpec::NORMAL, 50), row(2, MethodSpec::NORMAL, 0)];
         check_counted(&some, &mut warnings).unwrap();
         assert_eq!(warnings.len(), 1);
         assert!(warnings[0].starts_with("2 of 3 configurations counted 0 pixels") && warnings[0].ends_with("0, 2"));
-        let none = [row(0, MethodKind::Normal, 0), row(0, MethodKind::Focused, 0), row(1, MethodKind::Normal, 0)];
+        let none = [row(0, MethodSpec::NORMAL, 0), row(0, MethodSpec::FOCUSED, 0), row(1, MethodSpec::NORMAL, 0)];
         let e = check_counted(&none, &mut Vec::new()).unwrap_err();
         assert!(matches!(e, ExperimentError::NothingCounted { configs: 2 }), "{e}");
         assert!(e.to_string().contains("--eye x,y,z and --target x,y,z"));

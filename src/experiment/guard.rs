@@ -141,7 +141,7 @@ pub(super) fn check(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{MethodKind, Preset};
+    use super::super::{MethodSpec, Preset};
     use super::*;
 
     fn quick() -> ExperimentConfig {
@@ -185,7 +185,7 @@ mod tests {
 
     #[test]
     fn duplicate_methods_and_bad_fields_of_view_are_refused() {
-        let m = message(&ExperimentConfig { methods: vec![MethodKind::Focused, MethodKind::Focused], ..quick() });
+        let m = message(&ExperimentConfig { methods: vec![MethodSpec::FOCUSED, MethodSpec::FOCUSED], ..quick() });
         assert!(m.contains("focused twice"), "{m}");
         for fov in [-10.0, 0.0, 180.0, f64::NAN] {
             let m = message(&ExperimentConfig { fov_y_degrees: fov, ..quick() });

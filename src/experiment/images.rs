@@ -6,14 +6,14 @@ use std::path::{Path, PathBuf};
 
 use image::{Rgba, RgbaImage};
 
-use super::{ExperimentError, MethodKind};
+use super::{ExperimentError, MethodSpec};
 use crate::mesh::ShadowMasks;
 
 /// One picture collected by the run.
 #[derive(Clone, Debug)]
 pub(super) struct Picture {
     /// The method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// "best", "median" or "worst".
     pub which: &'static str,
     /// The configuration.
@@ -56,7 +56,7 @@ pub fn error_overlay(masks: &ShadowMasks, truth: &ShadowMasks) -> RgbaImage {
 pub(super) fn write_pictures(
     dir: &Path,
     pictures: &[Picture],
-) -> Result<Vec<(MethodKind, String, PathBuf)>, ExperimentError> {
+) -> Result<Vec<(MethodSpec, String, PathBuf)>, ExperimentError> {
     let images = dir.join("images");
     std::fs::create_dir_all(&images).map_err(|source| ExperimentError::Io { path: images.clone(), source })?;
     let mut written = Vec::new();

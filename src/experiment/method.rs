@@ -1,145 +1,252 @@
-//! The experiment's methods: a matrix method of the library (with the
-//! optimizer's search) and the shadow lookup its pictures are made with.
+//! The experiment's methods. A method is three choices that vary
+//! independently — the library's matrix [`Method`], the scene optimizer's
+//! [`Search`] and the renderer's [`ShadowLookup`] — so it is a struct of the
+//! three, named `method[-search][+lookup]` (`focused`, `optimized-argmin`,
+//! `lispsm+spsm`). A new lookup mode of the renderer becomes a method suffix
+//! by joining [`ShadowLookup::ALL`]; nothing here lists the combinations.
 
-use crate::render::{ShadowLookup, SpsmOptions};
-use crate::Method;
+use std::cmp::Ordering;
+use std::fmt;
 
-/// A method of the experiment: one of the library's [`Method`]s, the
-/// scene-optimized one with either search.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MethodKind {
-    /// Uniform around all receivers.
-    Normal,
-    /// Uniform around the visible receivers.
-    Focused,
-    /// Focused with world-fixed axes and a texel-snapped grid.
-    FocusedSnapped,
-    /// Light-space perspective.
-    #[serde(rename = "lispsm")]
-    LiSpsm,
-    /// Perspective shadow maps (near plane from the nearest visible depth).
-    Psm,
-    /// Perfect sampling on the floor plane.
-    PlaneOptimal,
-    /// Scene-optimized, the paper's search.
-    Optimized,
-    /// Scene-optimized with argmin's Nelder–Mead.
-    OptimizedArgmin,
-    /// `normal+spsm`: the normal matrix with the sub-pixel shadow-map lookup
-    /// ([`ShadowLookup::Spsm`]).
-    NormalSpsm,
-    /// `focused+spsm`.
-    FocusedSpsm,
-    /// `focused-snapped+spsm`.
-    FocusedSnappedSpsm,
-    /// `lispsm+spsm`.
-    LiSpsmSpsm,
-    /// `psm+spsm`.
-    PsmSpsm,
-    /// `plane-optimal+spsm`.
-    PlaneOptimalSpsm,
-    /// `optimized+spsm` (its frame loop's analysis bits come from the SPSM
-    /// lookup too).
-    OptimizedSpsm,
-    /// `optimized-argmin+spsm`.
-    OptimizedArgminSpsm,
+use crate::optimize::SearchStrategy;
+use crate::render::ShadowLookup;
+use crate::{Method, Parameterization, PsmOptions};
+
+/// Matrix methods in report order (the order of `--methods`' default and of
+/// the rows of `configs.csv`).
+const MATRICES: [Method; 7] = [
+    Method::Normal,
+    Method::Focused,
+    Method::FocusedSnapped,
+    Method::LiSpsm,
+    Method::Psm,
+    Method::PlaneOptimal,
+    Method::Optimized,
+];
+
+/// How the scene-optimized matrix searches its optical axis (the other
+/// matrix methods have no search).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Search {
+    /// The paper's rotation heuristic ([`SearchStrategy::Paper`]).
+    #[default]
+    Paper,
+    /// argmin's Nelder–Mead ([`SearchStrategy::NelderMead`]), named
+    /// `-argmin`.
+    Argmin,
 }
 
-impl MethodKind {
-    /// Every method, in report order.
-    pub const ALL: [Self; 8] = [
-        Self::Normal,
-        Self::Focused,
-        Self::FocusedSnapped,
-        Self::LiSpsm,
-        Self::Psm,
-        Self::PlaneOptimal,
-        Self::Optimized,
-        Self::OptimizedArgmin,
-    ];
+impl Search {
+    /// Iteration cap of the Nelder–Mead search.
+    pub const ARGMIN_ITERATIONS: u64 = 150;
 
-    /// Every method with the SPSM lookup (`<method>+spsm`), in report order.
-    pub const ALL_SPSM: [Self; 8] = [
-        Self::NormalSpsm,
-        Self::FocusedSpsm,
-        Self::FocusedSnappedSpsm,
-        Self::LiSpsmSpsm,
-        Self::PsmSpsm,
-        Self::PlaneOptimalSpsm,
-        Self::OptimizedSpsm,
-        Self::OptimizedArgminSpsm,
-    ];
-
-    /// The same matrix method with the standard lookup.
+    /// The optimizer's strategy.
     #[must_use]
-    pub fn base(self) -> Self {
-        match Self::ALL_SPSM.iter().position(|&m| m == self) {
-            Some(i) => Self::ALL[i],
-            None => self,
+    pub fn strategy(self) -> SearchStrategy {
+        match self {
+            Self::Paper => SearchStrategy::Paper,
+            Self::Argmin => SearchStrategy::NelderMead { max_iterations: Self::ARGMIN_ITERATIONS },
         }
     }
 
-    /// The same matrix method with the SPSM lookup (`<method>+spsm`).
-    #[must_use]
-    pub fn with_spsm(self) -> Self {
-        let base = self.base();
-        Self::ALL.iter().position(|&m| m == base).map_or(self, |i| Self::ALL_SPSM[i])
+    /// The name's suffix (empty for the paper's search).
+    fn suffix(self) -> &'static str {
+        match self {
+            Self::Paper => "",
+            Self::Argmin => "-argmin",
+        }
+    }
+}
+
+/// A method of the experiment and the viewer: a matrix method, its search
+/// and the shadow lookup its pictures are made with.
+///
+/// Written and parsed as its [name](Self::name) (also in `settings.json`).
+/// Ordered as the report lists methods: by lookup (in
+/// [`ShadowLookup::ALL`]'s order), then matrix method, then search.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(into = "String", try_from = "String")]
+pub struct MethodSpec {
+    matrix: Method,
+    search: Search,
+    lookup: ShadowLookup,
+}
+
+impl MethodSpec {
+    /// `normal`.
+    pub const NORMAL: Self = Self::standard(Method::Normal);
+    /// `focused`.
+    pub const FOCUSED: Self = Self::standard(Method::Focused);
+    /// `focused-snapped`.
+    pub const FOCUSED_SNAPPED: Self = Self::standard(Method::FocusedSnapped);
+    /// `lispsm`.
+    pub const LISPSM: Self = Self::standard(Method::LiSpsm);
+    /// `psm`.
+    pub const PSM: Self = Self::standard(Method::Psm);
+    /// `plane-optimal`.
+    pub const PLANE_OPTIMAL: Self = Self::standard(Method::PlaneOptimal);
+    /// `optimized` (the paper's search).
+    pub const OPTIMIZED: Self = Self::standard(Method::Optimized);
+    /// `optimized-argmin`.
+    pub const OPTIMIZED_ARGMIN: Self =
+        Self { matrix: Method::Optimized, search: Search::Argmin, lookup: ShadowLookup::DepthCompare };
+
+    /// Every matrix method and search with the standard lookup, in report
+    /// order (the experiment's default `--methods`).
+    pub const ALL: [Self; 8] = [
+        Self::NORMAL,
+        Self::FOCUSED,
+        Self::FOCUSED_SNAPPED,
+        Self::LISPSM,
+        Self::PSM,
+        Self::PLANE_OPTIMAL,
+        Self::OPTIMIZED,
+        Self::OPTIMIZED_ARGMIN,
+    ];
+
+    /// `matrix` with the paper's search and the standard lookup.
+    const fn standard(matrix: Method) -> Self {
+        Self { matrix, search: Search::Paper, lookup: ShadowLookup::DepthCompare }
     }
 
-    /// Whether it looks shadows up with sub-pixel shadow maps.
+    /// `matrix` with the paper's search and the standard lookup.
     #[must_use]
-    pub fn spsm(self) -> bool {
-        self.base() != self
+    pub fn new(matrix: Method) -> Self {
+        Self::standard(matrix)
     }
 
-    /// The shadow lookup its camera pass and frame loop use.
+    /// The same matrix method with another search. `None` for a method
+    /// without a search (every one but [`Method::Optimized`]) asked for
+    /// anything but [`Search::Paper`].
+    #[must_use]
+    pub fn with_search(self, search: Search) -> Option<Self> {
+        (self.matrix == Method::Optimized || search == Search::Paper).then_some(Self { search, ..self })
+    }
+
+    /// The same matrix method and search with another lookup.
+    #[must_use]
+    pub fn with_lookup(self, lookup: ShadowLookup) -> Self {
+        Self { lookup, ..self }
+    }
+
+    /// The library's matrix method.
+    #[must_use]
+    pub fn matrix(self) -> Method {
+        self.matrix
+    }
+
+    /// The scene optimizer's search (always [`Search::Paper`] for the other
+    /// methods).
+    #[must_use]
+    pub fn search(self) -> Search {
+        self.search
+    }
+
+    /// The shadow lookup of its camera pass (and, for the scene-optimized
+    /// method, of its frame loop's analysis bits).
     #[must_use]
     pub fn lookup(self) -> ShadowLookup {
-        if self.spsm() {
-            ShadowLookup::Spsm(SpsmOptions::default())
-        } else {
-            ShadowLookup::DepthCompare
-        }
+        self.lookup
     }
 
-    /// The library's method behind it.
+    /// The parameterization a fixed method solves, with PSM's near plane at
+    /// `nearest_view_depth` (what a depth readback supplies); `None` for
+    /// the scene-optimized method, which runs a frame loop instead.
     #[must_use]
-    pub fn method(self) -> Method {
-        match self.base() {
-            Self::Normal => Method::Normal,
-            Self::Focused => Method::Focused,
-            Self::FocusedSnapped => Method::FocusedSnapped,
-            Self::LiSpsm => Method::LiSpsm,
-            Self::Psm => Method::Psm,
-            Self::PlaneOptimal => Method::PlaneOptimal,
-            _ => Method::Optimized,
-        }
+    pub fn parameterization(self, nearest_view_depth: Option<f64>) -> Option<Parameterization> {
+        Some(match self.matrix {
+            Method::Normal => Parameterization::Normal,
+            Method::Focused => Parameterization::Focused,
+            Method::FocusedSnapped => Parameterization::FocusedSnapped(Default::default()),
+            Method::LiSpsm => Parameterization::LiSpsm(Default::default()),
+            Method::Psm => Parameterization::Psm(PsmOptions { min_view_depth: nearest_view_depth }),
+            Method::PlaneOptimal => Parameterization::PlaneOptimal(Default::default()),
+            _ => return None,
+        })
     }
 
-    /// Name used on the command line and in reports: the library's
-    /// [`Method::name`], with `-argmin` for the Nelder–Mead search and
-    /// `+spsm` for the sub-pixel shadow-map lookup.
+    /// Name on the command line, in the CSVs, reports and file names:
+    /// [`Method::name`], `-argmin` for the Nelder–Mead search, `+<lookup>`
+    /// for a lookup other than the standard depth compare
+    /// ([`ShadowLookup::name`]).
     #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::OptimizedArgmin => "optimized-argmin",
-            Self::NormalSpsm => "normal+spsm",
-            Self::FocusedSpsm => "focused+spsm",
-            Self::FocusedSnappedSpsm => "focused-snapped+spsm",
-            Self::LiSpsmSpsm => "lispsm+spsm",
-            Self::PsmSpsm => "psm+spsm",
-            Self::PlaneOptimalSpsm => "plane-optimal+spsm",
-            Self::OptimizedSpsm => "optimized+spsm",
-            Self::OptimizedArgminSpsm => "optimized-argmin+spsm",
-            other => other.method().name(),
-        }
+    pub fn name(self) -> String {
+        self.to_string()
     }
 
     /// Parses [`name`](Self::name).
     #[must_use]
     pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().chain(Self::ALL_SPSM).find(|m| m.name() == name)
+        let (base, lookup) = match name.split_once('+') {
+            None => (name, ShadowLookup::DepthCompare),
+            Some((base, suffix)) => {
+                // The standard lookup has no suffix: one name per method.
+                let lookup = ShadowLookup::parse(suffix).filter(|l| *l != ShadowLookup::DepthCompare)?;
+                (base, lookup)
+            }
+        };
+        let (matrix, search) = match base.strip_suffix(Search::Argmin.suffix()) {
+            Some(matrix) => (matrix, Search::Argmin),
+            None => (base, Search::Paper),
+        };
+        let matrix = MATRICES.into_iter().find(|m| m.name() == matrix)?;
+        Self::new(matrix).with_search(search).map(|m| m.with_lookup(lookup))
+    }
+
+    /// Every name [`parse`](Self::parse) takes with the standard lookup,
+    /// and the suffixes it takes, for error messages.
+    #[must_use]
+    pub fn valid_names() -> String {
+        let names: Vec<String> = Self::ALL.iter().map(|m| m.name()).collect();
+        let lookups: Vec<&str> =
+            ShadowLookup::ALL.iter().filter(|l| **l != ShadowLookup::DepthCompare).map(|l| l.name()).collect();
+        format!("{}, each optionally with +{}", names.join(", "), lookups.join(" or +"))
+    }
+
+    /// The position in report order.
+    fn rank(self) -> (usize, usize, Search) {
+        let lookup = ShadowLookup::ALL.iter().position(|l| l.name() == self.lookup.name()).unwrap_or(usize::MAX);
+        let matrix = MATRICES.iter().position(|&m| m == self.matrix).unwrap_or(usize::MAX);
+        (lookup, matrix, self.search)
+    }
+}
+
+impl fmt::Display for MethodSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}{}", self.matrix.name(), self.search.suffix())?;
+        if self.lookup != ShadowLookup::DepthCompare {
+            write!(f, "+{}", self.lookup.name())?;
+        }
+        Ok(())
+    }
+}
+
+impl Ord for MethodSpec {
+    fn cmp(&self, other: &Self) -> Ordering {
+        // Ties of rank (one lookup with different options) fall back to the
+        // name so that the order is total and consistent with `Eq` as far
+        // as reports can tell methods apart.
+        self.rank().cmp(&other.rank()).then_with(|| self.name().cmp(&other.name()))
+    }
+}
+
+impl PartialOrd for MethodSpec {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl From<MethodSpec> for String {
+    fn from(m: MethodSpec) -> Self {
+        m.name()
+    }
+}
+
+impl TryFrom<String> for MethodSpec {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, Self::Error> {
+        Self::parse(&name).ok_or_else(|| format!("unknown method {name:?}; valid methods: {}", Self::valid_names()))
     }
 }
 
@@ -148,16 +255,57 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_method_pairs_with_its_spsm_variant() {
-        assert_eq!(MethodKind::ALL.len(), MethodKind::ALL_SPSM.len());
-        for (&plain, &spsm) in MethodKind::ALL.iter().zip(&MethodKind::ALL_SPSM) {
-            assert_eq!(plain.with_spsm(), spsm);
-            assert_eq!(spsm.base(), plain);
-            assert_eq!(spsm.method(), plain.method());
-            assert!(spsm.spsm() && !plain.spsm());
-            assert_eq!(spsm.name(), format!("{}+spsm", plain.name()));
-            assert_eq!(MethodKind::parse(spsm.name()), Some(spsm));
-            assert_eq!(MethodKind::parse(plain.name()), Some(plain));
+    fn names_round_trip_for_every_matrix_search_and_lookup() {
+        let mut seen = std::collections::HashSet::new();
+        for lookup in ShadowLookup::ALL {
+            for m in MethodSpec::ALL {
+                let m = m.with_lookup(lookup);
+                let name = m.name();
+                assert_eq!(MethodSpec::parse(&name), Some(m), "{name}");
+                assert!(seen.insert(name.clone()), "two methods named {name}");
+                let json = serde_json::to_string(&m).unwrap();
+                assert_eq!(json, format!("{name:?}"));
+                assert_eq!(serde_json::from_str::<MethodSpec>(&json).unwrap(), m);
+            }
         }
+        assert_eq!(seen.len(), MethodSpec::ALL.len() * ShadowLookup::ALL.len());
+    }
+
+    #[test]
+    fn names_are_the_library_names_with_suffixes() {
+        assert_eq!(MethodSpec::LISPSM.name(), "lispsm");
+        assert_eq!(MethodSpec::OPTIMIZED_ARGMIN.name(), "optimized-argmin");
+        let spsm = ShadowLookup::ALL[1];
+        assert_eq!(MethodSpec::FOCUSED_SNAPPED.with_lookup(spsm).name(), "focused-snapped+spsm");
+        assert_eq!(MethodSpec::OPTIMIZED_ARGMIN.with_lookup(spsm).name(), "optimized-argmin+spsm");
+        for m in MethodSpec::ALL {
+            assert_eq!(m.name().split(['-', '+']).next(), m.matrix().name().split('-').next());
+        }
+    }
+
+    #[test]
+    fn only_the_optimizer_has_a_search_and_unknown_names_are_refused() {
+        assert_eq!(MethodSpec::FOCUSED.with_search(Search::Argmin), None);
+        for bad in
+            ["", "focused-argmin", "focused+", "focused+depth-compare", "optimized+nope", "Focused", "psm+spsm+spsm"]
+        {
+            assert_eq!(MethodSpec::parse(bad), None, "{bad:?}");
+        }
+        assert!(serde_json::from_str::<MethodSpec>("\"focused-spsm\"").is_err());
+    }
+
+    #[test]
+    fn report_order_is_lookup_then_matrix_then_search() {
+        let spsm = ShadowLookup::ALL[1];
+        let mut all: Vec<MethodSpec> = MethodSpec::ALL.iter().rev().flat_map(|&m| [m.with_lookup(spsm), m]).collect();
+        all.sort();
+        let expected: Vec<MethodSpec> =
+            MethodSpec::ALL.into_iter().chain(MethodSpec::ALL.iter().map(|m| m.with_lookup(spsm))).collect();
+        assert_eq!(all, expected);
+        assert_eq!(MethodSpec::OPTIMIZED.parameterization(None), None);
+        assert!(matches!(
+            MethodSpec::PSM.parameterization(Some(2.0)),
+            Some(Parameterization::Psm(PsmOptions { min_view_depth: Some(d) })) if d == 2.0
+        ));
     }
 }

@@ -43,13 +43,13 @@ use crate::render::{
     Frame, LoopError, LoopOptions, LoopPolicy, LoopView, RenderError, Renderer, RendererOptions, ShadowBias,
     ShadowFaces, ShadowLookup, ShadowLoop,
 };
-use crate::{Camera, Light, LightMatrix, LixelError, Parameterization, PsmOptions, ShadowMapSize, ShadowProblem};
+use crate::{Camera, Light, LightMatrix, LixelError, Parameterization, ShadowMapSize, ShadowProblem};
 
 pub use coverage::{facet_reference, Coverage, VisibilityError};
 pub use identity::{Identity, RESULT_NEUTRAL_SETTINGS};
 pub use images::error_overlay;
 pub use merge::{merge, MergeOptions};
-pub use method::MethodKind;
+pub use method::{MethodSpec, Search};
 pub use report::{markdown, MethodSummary, Summary};
 pub use rows::ConfigRow;
 pub use rundir::{report_dir, write_atomic};
@@ -125,7 +125,7 @@ pub struct ExperimentConfig {
     /// Square shadow-map resolution.
     pub map: u32,
     /// Methods to compare.
-    pub methods: Vec<MethodKind>,
+    pub methods: Vec<MethodSpec>,
     /// Ground truth.
     pub truth: Truth,
     /// Most frames the scene-optimized frame loop may take to settle.
@@ -181,7 +181,7 @@ impl ExperimentConfig {
             seed: 2006,
             screen: 512,
             map: 400,
-            methods: MethodKind::ALL.to_vec(),
+            methods: MethodSpec::ALL.to_vec(),
             truth: Truth::Both,
             max_optimize_frames: 12,
             equivalence_configs: 10,
@@ -488,7 +488,7 @@ pub struct ConfigOutcome {
     /// The light.
     pub light: Light,
     /// Per method, in the config's method order.
-    pub results: Vec<(MethodKind, MethodResult)>,
+    pub results: Vec<(MethodSpec, MethodResult)>,
     /// Pixels where the two truths disagree (when both were computed), and pixels compared.
     pub truth_disagreement: Option<(u64, u64)>,
     /// Wall time of the configuration.
@@ -559,7 +559,7 @@ impl<'a> Runner<'a> {
     }
 
     /// [`masks`](Self::masks) with another lookup (a method's:
-    /// [`MethodKind::lookup`]).
+    /// [`MethodSpec::lookup`]).
     ///
     /// # Errors
     /// Renderer failures.
@@ -609,27 +609,13 @@ impl<'a> Runner<'a> {
     /// Returns the matrix, the frames it took and a note.
     fn matrix(
         &mut self,
-        method: MethodKind,
+        method: MethodSpec,
         problem: &ShadowProblem,
         nearest: Option<f64>,
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
-        use MethodKind as K;
-        let p = match method {
-            K::Normal | K::NormalSpsm => Parameterization::Normal,
-            K::Focused | K::FocusedSpsm => Parameterization::Focused,
-            K::FocusedSnapped | K::FocusedSnappedSpsm => Parameterization::FocusedSnapped(Default::default()),
-            K::LiSpsm | K::LiSpsmSpsm => Parameterization::LiSpsm(Default::default()),
-            K::Psm | K::PsmSpsm => Parameterization::Psm(PsmOptions { min_view_depth: nearest }),
-            K::PlaneOptimal | K::PlaneOptimalSpsm => Parameterization::PlaneOptimal(Default::default()),
-            K::Optimized | K::OptimizedArgmin | K::OptimizedSpsm | K::OptimizedArgminSpsm => {
-                let strategy = if method.base() == K::Optimized {
-                    SearchStrategy::Paper
-                } else {
-                    SearchStrategy::NelderMead { max_iterations: 150 }
-                };
-                // The loop's analysis bits come from the method's lookup.
-                return self.settle(problem, strategy, method.lookup());
-            }
+        let Some(p) = method.parameterization(nearest) else {
+            // The loop's analysis bits come from the method's lookup.
+            return self.settle(problem, method.search().strategy(), method.lookup());
         };
         let m = problem.solve(&p)?;
         let note = m.fallback.map(rows::fallback_note).unwrap_or_default();
@@ -714,7 +700,7 @@ impl<'a> Runner<'a> {
     ///
     /// # Errors
     /// Renderer failures.
-    pub fn mean_at_resolution(&mut self, method: MethodKind, map: u32, count: usize) -> Result<f64, ExperimentError> {
+    pub fn mean_at_resolution(&mut self, method: MethodSpec, map: u32, count: usize) -> Result<f64, ExperimentError> {
         let mut total = 0.0;
         let mut n = 0usize;
         for index in 0..count {

@@ -10,9 +10,12 @@ use std::sync::Once;
 use image::RgbImage;
 use plotters::prelude::*;
 
+use super::method::Search;
 use super::report::Summary;
 use super::rows::ConfigRow;
-use super::{ExperimentConfig, ExperimentError, MethodKind};
+use super::{ExperimentConfig, ExperimentError, MethodSpec};
+use crate::render::ShadowLookup;
+use crate::Method;
 
 const FONT: &[u8] = include_bytes!("fonts/DejaVuSansMono.ttf");
 
@@ -29,24 +32,23 @@ fn register_font() {
     });
 }
 
-/// Line colour of each method (a method with the SPSM lookup: its base
-/// method's hue, darker).
-pub(super) fn color(method: MethodKind) -> RGBColor {
-    if method.spsm() {
-        let RGBColor(r, g, b) = color(method.base());
-        return RGBColor(r / 2, g / 2, b / 2);
-    }
-    match method {
-        MethodKind::Normal => RGBColor(120, 120, 120),
-        MethodKind::Focused => RGBColor(31, 119, 180),
-        MethodKind::FocusedSnapped => RGBColor(23, 190, 207),
-        MethodKind::LiSpsm => RGBColor(44, 160, 44),
-        MethodKind::Psm => RGBColor(148, 103, 189),
-        MethodKind::PlaneOptimal => RGBColor(255, 127, 14),
-        MethodKind::Optimized => RGBColor(214, 39, 40),
-        MethodKind::OptimizedArgmin => RGBColor(227, 119, 194),
-        _ => unreachable!("every SPSM method is mapped to its base above"),
-    }
+/// Line colour of each method: a hue per matrix method and search, darker
+/// for each lookup further along [`ShadowLookup::ALL`] (`+spsm`: half,
+/// the next a third).
+pub(super) fn color(method: MethodSpec) -> RGBColor {
+    let RGBColor(r, g, b) = match (method.matrix(), method.search()) {
+        (Method::Normal, _) => RGBColor(120, 120, 120),
+        (Method::Focused, _) => RGBColor(31, 119, 180),
+        (Method::FocusedSnapped, _) => RGBColor(23, 190, 207),
+        (Method::LiSpsm, _) => RGBColor(44, 160, 44),
+        (Method::Psm, _) => RGBColor(148, 103, 189),
+        (Method::PlaneOptimal, _) => RGBColor(255, 127, 14),
+        (_, Search::Paper) => RGBColor(214, 39, 40),
+        (_, Search::Argmin) => RGBColor(227, 119, 194),
+    };
+    let darker = ShadowLookup::ALL.iter().position(|l| l.name() == method.lookup().name()).unwrap_or(0);
+    let shade = |c: u8| c / (1 + darker.min(7) as u8);
+    RGBColor(shade(r), shade(g), shade(b))
 }
 
 /// Draws with `plot` on a white bitmap and writes it to `path` as PNG.
@@ -74,7 +76,7 @@ fn draw(
 /// `sorted-errors.png`: per method, its misclassified pixels per
 /// configuration sorted ascending; y logarithmic (of 1 + pixels).
 pub(super) fn sorted_errors(path: &Path, config: &ExperimentConfig, rows: &[ConfigRow]) -> Result<(), ExperimentError> {
-    let series: Vec<(MethodKind, Vec<u64>)> = config
+    let series: Vec<(MethodSpec, Vec<u64>)> = config
         .methods
         .iter()
         .map(|&m| {
@@ -158,7 +160,7 @@ pub(super) fn equivalence(path: &Path, summary: &Summary) -> Result<(), Experime
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(e)?;
-        let focused = color(MethodKind::Focused);
+        let focused = color(MethodSpec::FOCUSED);
         let ladder: Vec<(f64, f64)> =
             summary.ladder.iter().filter(|(_, m)| *m > 0.0).map(|&(s, m)| (f64::from(s), m)).collect();
         chart
@@ -167,7 +169,7 @@ pub(super) fn equivalence(path: &Path, summary: &Summary) -> Result<(), Experime
             .label("focused, by map size")
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], focused.stroke_width(3)));
         chart.draw_series(ladder.iter().map(|&p| Circle::new(p, 4, focused.filled()))).map_err(e)?;
-        let optimized = color(MethodKind::Optimized);
+        let optimized = color(MethodSpec::OPTIMIZED);
         let points: Vec<(f64, f64)> =
             summary.equivalence.iter().filter(|(_, m, _)| *m > 0.0).map(|&(s, m, _)| (f64::from(s), m)).collect();
         chart
@@ -199,7 +201,7 @@ mod tests {
     use super::super::Preset;
     use super::*;
 
-    fn row(config: usize, method: MethodKind, misclassified: u64) -> ConfigRow {
+    fn row(config: usize, method: MethodSpec, misclassified: u64) -> ConfigRow {
         ConfigRow {
             config,
             method,
@@ -225,20 +227,20 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("lixel-plots-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let config = ExperimentConfig {
-            methods: vec![MethodKind::Focused, MethodKind::Optimized],
+            methods: vec![MethodSpec::FOCUSED, MethodSpec::OPTIMIZED],
             ..ExperimentConfig::preset(Preset::Quick)
         };
         let rows: Vec<ConfigRow> = (0..12)
             .flat_map(|c| {
-                [row(c, MethodKind::Focused, 100 + 37 * c as u64), row(c, MethodKind::Optimized, 20 + 5 * c as u64)]
+                [row(c, MethodSpec::FOCUSED, 100 + 37 * c as u64), row(c, MethodSpec::OPTIMIZED, 20 + 5 * c as u64)]
             })
             .collect();
         let path = dir.join("sorted-errors.png");
         sorted_errors(&path, &config, &rows).unwrap();
         let image = image::open(&path).unwrap().to_rgb8();
         assert_eq!(image.dimensions(), PLOT_SIZE);
-        assert!(coloured(&image, color(MethodKind::Focused)) > 200, "focused line missing");
-        assert!(coloured(&image, color(MethodKind::Optimized)) > 200, "optimized line missing");
+        assert!(coloured(&image, color(MethodSpec::FOCUSED)) > 200, "focused line missing");
+        assert!(coloured(&image, color(MethodSpec::OPTIMIZED)) > 200, "optimized line missing");
         // Text and axes: a good share of dark pixels.
         let dark = image.pixels().filter(|p| p.0.iter().all(|&v| v < 80)).count();
         assert!(dark > 2_000, "only {dark} dark pixels: no axes or labels");
@@ -258,8 +260,8 @@ mod tests {
         equivalence(&path, &summary).unwrap();
         let image = image::open(&path).unwrap().to_rgb8();
         assert_eq!(image.dimensions(), PLOT_SIZE);
-        assert!(coloured(&image, color(MethodKind::Focused)) > 200, "ladder missing");
-        assert!(coloured(&image, color(MethodKind::Optimized)) > 50, "optimized markers missing");
+        assert!(coloured(&image, color(MethodSpec::FOCUSED)) > 200, "ladder missing");
+        assert!(coloured(&image, color(MethodSpec::OPTIMIZED)) > 50, "optimized markers missing");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -12,13 +12,13 @@ use super::finish::{equivalence_count, Completeness};
 use super::images::{self, Picture};
 use super::rows::{csv_text, ConfigRow};
 use super::rundir::write_atomic;
-use super::{plots, ExperimentConfig, ExperimentError, MethodKind};
+use super::{plots, ExperimentConfig, ExperimentError, MethodSpec};
 
 /// Per-method statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MethodSummary {
     /// The method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// Configurations with a count.
     pub configs: usize,
     /// Configurations where the method failed.
@@ -44,7 +44,7 @@ pub struct Summary {
     /// Per method, in config order.
     pub methods: Vec<MethodSummary>,
     /// For each method's worst 10% of configurations: every method's mean there.
-    pub worst: Vec<(MethodKind, Vec<f64>)>,
+    pub worst: Vec<(MethodSpec, Vec<f64>)>,
     /// Share of counted pixels where ray casting and the focused 4000² map agree.
     pub truth_agreement: Option<f64>,
     /// Resolution equivalence: (optimized map size, its mean error, focused size reaching it).
@@ -89,11 +89,11 @@ pub(super) fn summarize(
     elapsed: Duration,
     warnings: Vec<String>,
 ) -> Summary {
-    let per_method = |m: MethodKind| -> BTreeMap<usize, u64> {
+    let per_method = |m: MethodSpec| -> BTreeMap<usize, u64> {
         rows.iter().filter(|r| r.method == m).filter_map(|r| Some((r.config, r.misclassified?))).collect()
     };
     let mean = |v: &[u64]| if v.is_empty() { f64::NAN } else { v.iter().sum::<u64>() as f64 / v.len() as f64 };
-    let optimized_mean = mean(&per_method(MethodKind::Optimized).into_values().collect::<Vec<_>>());
+    let optimized_mean = mean(&per_method(MethodSpec::OPTIMIZED).into_values().collect::<Vec<_>>());
     let methods: Vec<MethodSummary> = config
         .methods
         .iter()
@@ -118,7 +118,7 @@ pub(super) fn summarize(
                 median,
                 percent_more_than_optimized: config
                     .methods
-                    .contains(&MethodKind::Optimized)
+                    .contains(&MethodSpec::OPTIMIZED)
                     .then(|| 100.0 * (mean(&values) / optimized_mean - 1.0)),
                 mean_frames: mean(&frames),
                 mean_visibility_error: (pixels > 0).then(|| error / pixels as f64),
@@ -242,8 +242,8 @@ pub(super) fn write_shard(
 
 /// `report.md`: the paper's Table 1 layout, then the rest.
 #[must_use]
-pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(MethodKind, String, PathBuf)]) -> String {
-    let names: Vec<&str> = config.methods.iter().map(|m| m.name()).collect();
+pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(MethodSpec, String, PathBuf)]) -> String {
+    let names: Vec<String> = config.methods.iter().map(|m| m.name()).collect();
     let mut md = String::new();
     let _ = writeln!(md, "# Misclassified shadow pixels\n");
     if !summary.missing.is_empty() {

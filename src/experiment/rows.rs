@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use super::identity::Identity;
 use super::rundir::{io, write_atomic, RunDir};
-use super::{ConfigOutcome, ExperimentConfig, ExperimentError, MethodKind};
+use super::{ConfigOutcome, ExperimentConfig, ExperimentError, MethodSpec};
 use crate::{Fallback, Light};
 
 pub(super) const CONFIGS_HEADER: &str =
@@ -21,7 +21,7 @@ pub struct ConfigRow {
     /// Configuration index.
     pub config: usize,
     /// Method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// Light position (point) or the direction it comes from, reversed (directional).
     pub light: [f64; 3],
     /// Pixels counted; `None` when the method failed.
@@ -98,7 +98,7 @@ impl ConfigRow {
         };
         Some(Self {
             config: f[0].parse().ok()?,
-            method: MethodKind::parse(f[1])?,
+            method: MethodSpec::parse(f[1])?,
             light: [f[2].parse().ok()?, f[3].parse().ok()?, f[4].parse().ok()?],
             counted: num(f[5])?,
             misclassified: num(f[6])?,

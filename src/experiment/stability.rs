@@ -25,9 +25,9 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 
-use super::{write_atomic, Counts, ExperimentConfig, ExperimentError, MethodKind, Preset, Runner, Truth};
-use crate::mesh::ShadowMasks;
-use crate::optimize::{AcceptMeasure, OptimizeOptions, SearchStrategy, TexelSnap};
+use super::{write_atomic, Counts, ExperimentConfig, ExperimentError, MethodSpec, Preset, Runner, Truth};
+use crate::mesh::{Flicker, ShadowMasks};
+use crate::optimize::{AcceptMeasure, OptimizeOptions, TexelSnap};
 use crate::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
 use crate::{Camera, ShadowMapSize};
 
@@ -86,53 +86,13 @@ impl CameraPath {
     }
 }
 
-/// Flicker between two consecutive frames of one method (light 0).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Flicker {
-    /// Pixels counted in both frames whose truth bit did not change.
-    pub stable: u64,
-    /// Of those, pixels whose method bit changed.
-    pub flipped: u64,
-}
-
-impl Flicker {
-    /// Compares frames `a` and `b` of a method with the truths of the same
-    /// frames. Pixels counted (visible, light-facing) in both truths and with
-    /// the same truth bit are `stable`; those among them whose method bit
-    /// differs are `flipped`.
-    #[must_use]
-    pub fn between(a: &ShadowMasks, truth_a: &ShadowMasks, b: &ShadowMasks, truth_b: &ShadowMasks) -> Self {
-        let n = a.depth.len().min(b.depth.len()).min(truth_a.depth.len()).min(truth_b.depth.len());
-        let counted = |t: &ShadowMasks, i: usize| t.visible(i) && t.facing[i] & 1 == 1;
-        let mut out = Self::default();
-        for i in 0..n {
-            if !counted(truth_a, i) || !counted(truth_b, i) || (truth_a.shadow[i] ^ truth_b.shadow[i]) & 1 == 1 {
-                continue;
-            }
-            out.stable += 1;
-            out.flipped += u64::from((a.shadow[i] ^ b.shadow[i]) & 1);
-        }
-        out
-    }
-
-    /// `flipped / stable` (0 when nothing was counted).
-    #[must_use]
-    pub fn share(&self) -> f64 {
-        if self.stable == 0 {
-            0.0
-        } else {
-            self.flipped as f64 / self.stable as f64
-        }
-    }
-}
-
 /// One curve of the report: a method and, for the scene-optimized ones,
 /// the optimizer's options (the trade-off plot has one point per method and
 /// option set).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Variant {
     /// The method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// The option set's name in the report (`default` for the defaults).
     pub options: String,
     /// The optimizer's options (scene-optimized methods only; `None` for
@@ -143,14 +103,14 @@ pub struct Variant {
 impl Variant {
     /// A method with its default options.
     #[must_use]
-    pub fn of(method: MethodKind) -> Self {
+    pub fn of(method: MethodSpec) -> Self {
         Self { method, options: "default".into(), optimize: None }
     }
 
     /// The scene optimizer (paper search) with `optimize`, named `options`.
     #[must_use]
     pub fn optimized(options: &str, optimize: OptimizeOptions) -> Self {
-        Self { method: MethodKind::Optimized, options: options.into(), optimize: Some(optimize) }
+        Self { method: MethodSpec::OPTIMIZED, options: options.into(), optimize: Some(optimize) }
     }
 
     /// The option sets of the scene optimizer that `--stability-options`
@@ -178,7 +138,7 @@ impl Variant {
                 OptimizeOptions { hold: true, snap, max_turn_degrees: turn, ..paper.clone() },
             ),
             Self {
-                method: MethodKind::OptimizedArgmin,
+                method: MethodSpec::OPTIMIZED_ARGMIN,
                 options: "hold".into(),
                 optimize: Some(OptimizeOptions { hold: true, ..paper }),
             },
@@ -200,7 +160,7 @@ impl Variant {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilityRow {
     /// The method.
-    pub method: MethodKind,
+    pub method: MethodSpec,
     /// Its option set's name (`default` for the defaults).
     pub options: String,
     /// Flicker share per frame transition (`frames - 1` values).
@@ -257,7 +217,7 @@ fn mean(values: impl Iterator<Item = f64>) -> f64 {
 
 /// How one method produces its matrix frame after frame.
 enum Source {
-    Fixed(MethodKind),
+    Fixed(MethodSpec),
     Loop(Box<ShadowLoop>),
 }
 
@@ -317,27 +277,21 @@ pub fn measure_variants(
     let mut rows = Vec::new();
     for (m, variant) in variants.iter().enumerate() {
         let method = variant.method;
-        let mut source = match method {
-            MethodKind::Optimized | MethodKind::OptimizedArgmin => {
-                let strategy = if method == MethodKind::Optimized {
-                    SearchStrategy::Paper
-                } else {
-                    SearchStrategy::NelderMead { max_iterations: 150 }
-                };
-                let optimize = variant.optimize.clone().unwrap_or_default();
-                let optimize = OptimizeOptions { strategy, ..optimize };
-                let mut shadows =
-                    ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() })?;
-                let view = LoopView {
-                    camera: &cameras[0],
-                    lights: std::slice::from_ref(&light),
-                    bounds: runner.scene.bounds(),
-                    map,
-                };
-                shadows.settle(&mut runner.renderer, &view, config.max_optimize_frames)?;
-                Source::Loop(Box::new(shadows))
-            }
-            other => Source::Fixed(other),
+        let mut source = if method.parameterization(None).is_some() {
+            Source::Fixed(method)
+        } else {
+            let optimize = variant.optimize.clone().unwrap_or_default();
+            let optimize = OptimizeOptions { strategy: method.search().strategy(), ..optimize };
+            let options = LoopOptions { optimize, lookup: method.lookup(), ..Default::default() };
+            let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, options)?;
+            let view = LoopView {
+                camera: &cameras[0],
+                lights: std::slice::from_ref(&light),
+                bounds: runner.scene.bounds(),
+                map,
+            };
+            shadows.settle(&mut runner.renderer, &view, config.max_optimize_frames)?;
+            Source::Loop(Box::new(shadows))
         };
         let mut row = StabilityRow {
             method,
@@ -363,17 +317,17 @@ pub fn measure_variants(
                     frame.matrices[0]
                 }
             };
-            let masks = runner.masks(&matrix)?;
+            let masks = runner.masks_with(&matrix, method.lookup())?;
             row.misclassified.push(Counts::compare(&masks, &truths[f]).misclassified());
             if let Some((prev, prev_matrix)) = &previous {
-                row.flicker.push(Flicker::between(prev, &truths[f - 1], &masks, &truths[f]).share());
+                row.flicker.push(Flicker::between(0, prev, &truths[f - 1], &masks, &truths[f]).share());
                 // The previous frame's map seen from this camera: what the
                 // map change alone flipped.
                 let shimmer = if *prev_matrix == matrix {
                     0.0
                 } else {
-                    let held = runner.masks(prev_matrix)?;
-                    Flicker::between(&held, &truths[f], &masks, &truths[f]).share()
+                    let held = runner.masks_with(prev_matrix, method.lookup())?;
+                    Flicker::between(0, &held, &truths[f], &masks, &truths[f]).share()
                 };
                 row.shimmer.push(shimmer);
             }
@@ -456,7 +410,7 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
     md
 }
 
-fn color(method: MethodKind) -> String {
+fn color(method: MethodSpec) -> String {
     let c = super::plots::color(method);
     format!("#{:02x}{:02x}{:02x}", c.0, c.1, c.2)
 }
@@ -568,42 +522,10 @@ mod tests {
 
     use super::*;
 
-    fn masks(shadow: &[u32], facing: &[u32]) -> ShadowMasks {
-        ShadowMasks {
-            width: shadow.len() as u32,
-            height: 1,
-            depth: vec![0.5; shadow.len()],
-            shadow: shadow.to_vec(),
-            facing: facing.to_vec(),
-        }
-    }
-
-    #[test]
-    fn truth_flips_are_excluded() {
-        let facing = [1, 1, 1, 1, 0];
-        let truth_a = masks(&[0, 1, 0, 1, 0], &facing);
-        let truth_b = masks(&[0, 1, 1, 0, 0], &facing); // pixels 2 and 3 really change
-        let a = masks(&[0, 1, 0, 1, 0], &facing);
-        let b = masks(&[1, 0, 1, 0, 1], &facing); // flips 0, 1 (errors), 2, 3 (truth), 4 (not counted)
-        let f = Flicker::between(&a, &truth_a, &b, &truth_b);
-        assert_eq!(f, Flicker { stable: 2, flipped: 2 });
-        assert_eq!(f.share(), 1.0);
-        // Following the truth exactly is no flicker.
-        assert_eq!(Flicker::between(&truth_a, &truth_a, &truth_b, &truth_b).flipped, 0);
-    }
-
-    #[test]
-    fn identical_frames_do_not_flicker() {
-        let facing = [1, 1, 1];
-        let t = masks(&[1, 0, 1], &facing);
-        let m = masks(&[0, 0, 1], &facing);
-        assert_eq!(Flicker::between(&m, &t, &m, &t), Flicker { stable: 3, flipped: 0 });
-    }
-
     #[test]
     fn percentile_and_means() {
         let row = StabilityRow {
-            method: MethodKind::Focused,
+            method: MethodSpec::FOCUSED,
             options: "default".into(),
             flicker: (1..=20).map(|i| f64::from(i) / 100.0).collect(),
             shimmer: vec![0.0, 0.5],

@@ -134,3 +134,104 @@ impl ShadowMasks {
         Some(count as u64)
     }
 }
+
+/// Flicker of one light's shadow between two consecutive frames: the pixels
+/// whose shadow bit changes while the truth's does not (a change the truth
+/// also makes is real motion of the shadow, not flicker).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Flicker {
+    /// Pixels visible and facing the light in both truths, with the same
+    /// truth bit.
+    pub stable: u64,
+    /// Of those, pixels whose bit changed between the two frames.
+    pub flipped: u64,
+}
+
+impl Flicker {
+    /// Compares frames `a` and `b` for `light` with the truths of the same
+    /// frames. Sizes must match (pixels past the shortest are ignored); a
+    /// light past [`MAX_LIGHTS`](crate::MAX_LIGHTS) counts nothing.
+    #[must_use]
+    pub fn between(light: u32, a: &ShadowMasks, truth_a: &ShadowMasks, b: &ShadowMasks, truth_b: &ShadowMasks) -> Self {
+        let mut out = Self::default();
+        if light as usize >= crate::MAX_LIGHTS {
+            return out;
+        }
+        let n = a.depth.len().min(b.depth.len()).min(truth_a.depth.len()).min(truth_b.depth.len());
+        let bit = |words: &[u32], i: usize| words[i] >> light & 1;
+        let counted = |t: &ShadowMasks, i: usize| t.visible(i) && bit(&t.facing, i) == 1;
+        for i in 0..n {
+            if !counted(truth_a, i) || !counted(truth_b, i) || bit(&truth_a.shadow, i) != bit(&truth_b.shadow, i) {
+                continue;
+            }
+            out.stable += 1;
+            out.flipped += u64::from(bit(&a.shadow, i) ^ bit(&b.shadow, i));
+        }
+        out
+    }
+
+    /// `flipped / stable` (0 when nothing was counted).
+    #[must_use]
+    pub fn share(&self) -> f64 {
+        if self.stable == 0 {
+            0.0
+        } else {
+            self.flipped as f64 / self.stable as f64
+        }
+    }
+
+    /// Sums two counts (e.g. over frames or lights).
+    #[must_use]
+    pub fn merged(self, other: Self) -> Self {
+        Self { stable: self.stable + other.stable, flipped: self.flipped + other.flipped }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn masks(shadow: &[u32], facing: &[u32]) -> ShadowMasks {
+        ShadowMasks {
+            width: shadow.len() as u32,
+            height: 1,
+            depth: vec![0.5; shadow.len()],
+            shadow: shadow.to_vec(),
+            facing: facing.to_vec(),
+        }
+    }
+
+    #[test]
+    fn truth_flips_are_excluded() {
+        let facing = [1, 1, 1, 1, 0];
+        let truth_a = masks(&[0, 1, 0, 1, 0], &facing);
+        let truth_b = masks(&[0, 1, 1, 0, 0], &facing); // pixels 2 and 3 really change
+        let a = masks(&[0, 1, 0, 1, 0], &facing);
+        let b = masks(&[1, 0, 1, 0, 1], &facing); // flips 0, 1 (errors), 2, 3 (truth), 4 (not counted)
+        let f = Flicker::between(0, &a, &truth_a, &b, &truth_b);
+        assert_eq!(f, Flicker { stable: 2, flipped: 2 });
+        assert_eq!(f.share(), 1.0);
+        // Following the truth exactly is no flicker.
+        assert_eq!(Flicker::between(0, &truth_a, &truth_a, &truth_b, &truth_b).flipped, 0);
+    }
+
+    #[test]
+    fn identical_frames_do_not_flicker() {
+        let facing = [1, 1, 1];
+        let t = masks(&[1, 0, 1], &facing);
+        let m = masks(&[0, 0, 1], &facing);
+        assert_eq!(Flicker::between(0, &m, &t, &m, &t), Flicker { stable: 3, flipped: 0 });
+    }
+
+    #[test]
+    fn each_light_is_its_own_bit() {
+        // Light 1 (bit 1) flickers on pixel 0; light 0 does not.
+        let facing = [0b11, 0b11];
+        let t = masks(&[0b00, 0b10], &facing);
+        let a = masks(&[0b00, 0b10], &facing);
+        let b = masks(&[0b10, 0b10], &facing);
+        assert_eq!(Flicker::between(0, &a, &t, &b, &t), Flicker { stable: 2, flipped: 0 });
+        assert_eq!(Flicker::between(1, &a, &t, &b, &t), Flicker { stable: 2, flipped: 1 });
+        assert_eq!(Flicker::between(32, &a, &t, &b, &t), Flicker::default());
+    }
+}

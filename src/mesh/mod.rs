@@ -30,7 +30,7 @@ use glam::{Affine3A, Vec3};
 pub use load::{
     load_scene_file, LoadReport, Repair, SceneLoadError, SceneOptions, UpAxis, MAX_COORDINATE, MAX_TRIANGLES,
 };
-pub use masks::{MaskAgreement, ShadowMasks};
+pub use masks::{Flicker, MaskAgreement, ShadowMasks};
 pub use obj::{load_obj, ObjError};
 pub use procedural::{default_scene, ProceduralScene};
 pub use raycast::{Bvh, RayCaster};

@@ -24,10 +24,7 @@ use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::min_enclosing_cone;
 use crate::matrix::{fit_homography, holds_all, AxisFit, Fallback, LightMatrix, Method};
 
-pub use objective::{
-    objective, objective_gradient, plane_frame_gradient, sample_badness, sample_badness_gradient, BoundarySample,
-    SampleGradient,
-};
+pub use objective::{objective, objective_gradient, plane_frame_gradient, sample_badness, BoundarySample};
 pub use samples::{PixelRect, Readback, ReadbackDepth, ReadbackLayout, RowOrder, SampleCounts, SampleOptions, Samples};
 pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
 pub use stable::{AcceptMeasure, TexelSnap};

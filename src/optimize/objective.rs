@@ -70,7 +70,7 @@ pub fn sample_badness(g: &DMat3, s: &BoundarySample) -> f64 {
 
 /// Badness of one sample and its gradient with respect to the rows of `g`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SampleGradient {
+pub(crate) struct SampleGradient {
     /// The badness `b`.
     pub badness: f64,
     /// `∂b/∂g₁`.
@@ -84,7 +84,7 @@ pub struct SampleGradient {
 /// Badness of one sample and its gradient with respect to the three rows of
 /// `g` (texel units). `None` behind the light or edge-on.
 #[must_use]
-pub fn sample_badness_gradient(g: &DMat3, s: &BoundarySample) -> Option<SampleGradient> {
+pub(crate) fn sample_badness_gradient(g: &DMat3, s: &BoundarySample) -> Option<SampleGradient> {
     let p = parts(g, s)?;
     let jac = p.jac;
     let det = jac.determinant();

@@ -46,6 +46,13 @@ impl ShadowLookup {
         }
     }
 
+    /// Parses [`name`](Self::name) (a mode of [`ALL`](Self::ALL), with its
+    /// default options).
+    #[must_use]
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|l| l.name() == name)
+    }
+
     /// The three parts a mode provides.
     fn spec(self) -> LookupSpec {
         match self {

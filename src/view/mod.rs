@@ -44,9 +44,9 @@ pub use truth::ErrorCounts;
 pub use viewer::{FrameStats, Viewer, SCREENSHOT_FORMAT};
 pub use window::{run_window, WindowOptions, WindowSummary};
 
-use crate::experiment::{ExperimentConfig, ExperimentError, MethodKind, Preset};
+use crate::experiment::{ExperimentConfig, ExperimentError, MethodSpec, Preset};
 use crate::optimize::ScheduleOptions;
-use crate::render::{RenderError, ShadowLookup};
+use crate::render::RenderError;
 
 /// Why the viewer stopped.
 #[derive(Debug, thiserror::Error)]
@@ -163,10 +163,8 @@ pub struct ViewConfig {
     pub experiment: ExperimentConfig,
     /// Lights: the experiment's configurations `0..lights` (at most 32).
     pub lights: usize,
-    /// The method every light uses.
-    pub method: MethodKind,
-    /// How shadows are looked up.
-    pub lookup: ShadowLookup,
+    /// The method every light uses, with its shadow lookup.
+    pub method: MethodSpec,
     /// Overlays drawn at the start.
     pub overlays: Overlays,
     /// Cadence of the analysis passes (scene-optimized).
@@ -180,8 +178,7 @@ impl ViewConfig {
         Self {
             experiment: ExperimentConfig::preset(preset),
             lights: 1,
-            method: MethodKind::Optimized,
-            lookup: ShadowLookup::default(),
+            method: MethodSpec::OPTIMIZED,
             overlays: Overlays { hud: true, ..Overlays::default() },
             schedule: ScheduleOptions::default(),
         }

@@ -10,14 +10,14 @@ use glam::UVec2;
 use super::composite::{Composite, CompositeRaw, Slot};
 use super::truth::{self, ErrorCounts};
 use super::{hud, CameraPath, FlyCamera, LightRig, Overlays, ViewConfig, ViewError, MAP_SIZES};
-use crate::experiment::{self, MethodKind};
+use crate::experiment::{self, MethodSpec};
 use crate::mesh::RayCaster;
-use crate::optimize::{OptimizeOptions, ScheduleOptions, SearchStrategy};
+use crate::optimize::{OptimizeOptions, ScheduleOptions};
 use crate::render::{
     shadow_map_image, Frame, GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Renderer, RendererOptions,
     ShadowLookup, ShadowLoop,
 };
-use crate::{LightMatrix, Parameterization, SceneBounds, ShadowMapSize};
+use crate::{LightMatrix, SceneBounds, ShadowMapSize};
 
 /// The format of [`Viewer::screenshot`]'s target (and so of a viewer made
 /// for screenshots).
@@ -57,8 +57,7 @@ struct ViewKey {
     camera: FlyCamera,
     size: UVec2,
     lights: Vec<crate::Light>,
-    method: MethodKind,
-    lookup: ShadowLookup,
+    method: MethodSpec,
     map: u32,
 }
 
@@ -78,8 +77,7 @@ pub struct Viewer {
     rig: LightRig,
     size: UVec2,
     map: u32,
-    method: MethodKind,
-    lookup: ShadowLookup,
+    method: MethodSpec,
     overlays: Overlays,
     selected: usize,
     error_requested: bool,
@@ -140,7 +138,7 @@ impl Viewer {
         camera.near = start.z_near();
         let renderer = Renderer::new(device, queue, &scene, RendererOptions::default())?;
         let rig = LightRig::new(&config.experiment, &scene, config.lights);
-        let shadows = new_loop(config.method, config.lights, config.schedule, config.lookup)?;
+        let shadows = new_loop(config.method, config.lights, config.schedule)?;
         Ok(Self {
             device: device.clone(),
             queue: queue.clone(),
@@ -154,7 +152,6 @@ impl Viewer {
             size: UVec2::splat(config.experiment.screen),
             map: config.experiment.map,
             method: config.method,
-            lookup: config.lookup,
             overlays: config.overlays,
             selected: 0,
             error_requested: config.overlays.error,
@@ -194,29 +191,29 @@ impl Viewer {
 
     /// The method every light uses.
     #[must_use]
-    pub fn method(&self) -> MethodKind {
+    pub fn method(&self) -> MethodSpec {
         self.method
     }
 
-    /// Switches every light to `method` (a new frame loop: a scene-optimized
-    /// loop starts from focused matrices).
+    /// Switches every light to `method`, its lookup included (a new frame
+    /// loop: a scene-optimized loop starts from focused matrices).
     ///
     /// # Errors
     /// [`ViewError::Config`] when the loop cannot be made.
-    pub fn set_method(&mut self, method: MethodKind) -> Result<(), ViewError> {
+    pub fn set_method(&mut self, method: MethodSpec) -> Result<(), ViewError> {
         self.method = method;
         self.restart_loop()
     }
 
-    /// Steps to the next lookup mode.
+    /// Keeps the matrix method and steps to the next lookup mode of
+    /// [`ShadowLookup::ALL`].
     ///
     /// # Errors
     /// As [`set_method`](Self::set_method).
     pub fn next_lookup(&mut self) -> Result<(), ViewError> {
         let all = ShadowLookup::ALL;
-        let i = all.iter().position(|&l| l == self.lookup).unwrap_or(0);
-        self.lookup = all[(i + 1) % all.len()];
-        self.restart_loop()
+        let i = all.iter().position(|&l| l == self.method.lookup()).unwrap_or(0);
+        self.set_method(self.method.with_lookup(all[(i + 1) % all.len()]))
     }
 
     /// The square map size.
@@ -304,21 +301,14 @@ impl Viewer {
     }
 
     fn restart_loop(&mut self) -> Result<(), ViewError> {
-        self.shadows = new_loop(self.method, self.rig.len(), self.config.schedule, self.lookup)?;
+        self.shadows = new_loop(self.method, self.rig.len(), self.config.schedule)?;
         self.renderer.discard_analyses();
         self.boundary.clear();
         Ok(())
     }
 
     fn key(&self) -> ViewKey {
-        ViewKey {
-            camera: self.camera,
-            size: self.size,
-            lights: self.rig.lights(),
-            method: self.method,
-            lookup: self.lookup,
-            map: self.map,
-        }
+        ViewKey { camera: self.camera, size: self.size, lights: self.rig.lights(), method: self.method, map: self.map }
     }
 
     /// Renders one frame into `target` (a view of a texture of the format
@@ -399,7 +389,7 @@ impl Viewer {
             lights: &self.matrices,
             masks: true,
             analysis: None,
-            lookup: self.lookup,
+            lookup: self.method.lookup(),
         })?;
         self.renderer.wait_for(&report.submission)?;
         let masks = self.renderer.read_masks()?;
@@ -475,7 +465,7 @@ impl Viewer {
         let fps = if s.frame_time.is_zero() { 0.0 } else { 1.0 / s.frame_time.as_secs_f64() };
         let n = self.rig.len();
         let mut lines = vec![
-            format!("{} ({}) map {}² light {}/{n}", self.method.name(), self.lookup.name(), self.map, self.selected),
+            format!("{} map {}² light {}/{n}", self.method, self.map, self.selected),
             format!(
                 "frame {}: {:.1} ms ({fps:.1} fps) cpu {:.1} ms",
                 s.frames,
@@ -584,38 +574,11 @@ impl Viewer {
 }
 
 /// The frame loop of `method` for `lights` lights.
-fn new_loop(
-    method: MethodKind,
-    lights: usize,
-    schedule: ScheduleOptions,
-    lookup: ShadowLookup,
-) -> Result<ShadowLoop, ViewError> {
-    let (policy, strategy) = match method {
-        // A `+spsm` method is its matrix method here: the viewer's lookup is its own setting.
-        MethodKind::Normal | MethodKind::NormalSpsm => {
-            (LoopPolicy::Fixed(Parameterization::Normal), SearchStrategy::Paper)
-        }
-        MethodKind::Focused | MethodKind::FocusedSpsm => {
-            (LoopPolicy::Fixed(Parameterization::Focused), SearchStrategy::Paper)
-        }
-        MethodKind::FocusedSnapped | MethodKind::FocusedSnappedSpsm => {
-            (LoopPolicy::Fixed(Parameterization::FocusedSnapped(Default::default())), SearchStrategy::Paper)
-        }
-        MethodKind::LiSpsm | MethodKind::LiSpsmSpsm => {
-            (LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())), SearchStrategy::Paper)
-        }
-        MethodKind::Psm | MethodKind::PsmSpsm => {
-            (LoopPolicy::Fixed(Parameterization::Psm(Default::default())), SearchStrategy::Paper)
-        }
-        MethodKind::PlaneOptimal | MethodKind::PlaneOptimalSpsm => {
-            (LoopPolicy::Fixed(Parameterization::PlaneOptimal(Default::default())), SearchStrategy::Paper)
-        }
-        MethodKind::Optimized | MethodKind::OptimizedSpsm => (LoopPolicy::Optimized, SearchStrategy::Paper),
-        MethodKind::OptimizedArgmin | MethodKind::OptimizedArgminSpsm => {
-            (LoopPolicy::Optimized, SearchStrategy::NelderMead { max_iterations: 150 })
-        }
-    };
-    let options = LoopOptions { schedule, optimize: OptimizeOptions { strategy, ..Default::default() }, lookup };
+fn new_loop(method: MethodSpec, lights: usize, schedule: ScheduleOptions) -> Result<ShadowLoop, ViewError> {
+    let policy = method.parameterization(None).map_or(LoopPolicy::Optimized, LoopPolicy::Fixed);
+    let strategy = method.search().strategy();
+    let optimize = OptimizeOptions { strategy, ..Default::default() };
+    let options = LoopOptions { schedule, optimize, lookup: method.lookup() };
     ShadowLoop::new(policy, lights, options).map_err(|e| ViewError::Config(e.to_string()))
 }
 

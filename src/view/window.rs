@@ -14,7 +14,7 @@ use winit::keyboard::{Key, KeyCode, NamedKey, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use super::{CameraPath, ViewConfig, ViewError, Viewer};
-use crate::experiment::MethodKind;
+use crate::experiment::MethodSpec;
 
 /// What the window does besides showing the view.
 #[derive(Clone, Debug, Default)]
@@ -257,7 +257,8 @@ fn press(state: &mut WindowState, key: &Key) -> Result<(), ViewError> {
     match text.to_lowercase().as_str() {
         digit @ ("1" | "2" | "3" | "4" | "5" | "6" | "7" | "8") => {
             let i: usize = digit.parse().unwrap_or(1);
-            viewer.set_method(MethodKind::ALL[i - 1])?;
+            // A digit picks the matrix method and keeps the lookup.
+            viewer.set_method(MethodSpec::ALL[i - 1].with_lookup(viewer.method().lookup()))?;
         }
         "k" => viewer.next_lookup()?,
         "[" => viewer.step_map_size(false)?,
