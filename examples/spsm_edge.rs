@@ -22,7 +22,8 @@
 mod support;
 
 use glam::DVec3;
-use lixel::experiment::{Counts, ExperimentConfig, MethodKind, Preset, Runner};
+use lixel::experiment::{Counts, ExperimentConfig, MethodSpec, Preset, Runner};
+use lixel::render::{ShadowLookup, SpsmOptions};
 use lixel::mesh::raycast::Ray;
 use lixel::mesh::RayCaster;
 use lixel::{Light, LightMatrix};
@@ -45,15 +46,15 @@ fn run() -> Result<(), String> {
     let index: usize = args.parse("--config", 1)?;
     if let Some(path) = args.value("--trio") {
         let name = args.value("--method").unwrap_or("focused");
-        let base = MethodKind::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
+        let base = MethodSpec::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
         let fov: f64 = args.parse("--fov", 5.0)?;
         let screen: u32 = args.parse("--screen", 256)?;
         return trio(preset, index, base, (fov, screen), path);
     }
     let name = args.value("--method").unwrap_or("optimized");
-    let base = MethodKind::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
+    let base = MethodSpec::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
     let mut config = ExperimentConfig::preset(preset);
-    config.methods = vec![base, base.with_spsm()];
+    config.methods = vec![base, base.with_lookup(ShadowLookup::Spsm(SpsmOptions::default()))];
     config.coverage_samples = 0;
     let (device, queue, info) = support::gpu()?;
     eprintln!("adapter: {} ({:?})", info.name, info.backend);
@@ -147,7 +148,7 @@ fn print_w(m: &LightMatrix) {
 }
 
 /// The README's trio (see the module docs).
-fn trio(preset: Preset, index: usize, base: MethodKind, (fov, screen): (f64, u32), path: &str) -> Result<(), String> {
+fn trio(preset: Preset, index: usize, base: MethodSpec, (fov, screen): (f64, u32), path: &str) -> Result<(), String> {
     let mut config = ExperimentConfig::preset(preset);
     config.methods = vec![base];
     config.coverage_samples = 0;
@@ -199,7 +200,7 @@ fn trio(preset: Preset, index: usize, base: MethodKind, (fov, screen): (f64, u32
     let mut runner = Runner::new(&close, &device, &queue).map_err(|e| e.to_string())?;
     let truth = runner.truths(light).map_err(|e| e.to_string())?.0.ok_or("no ray-cast truth")?;
     let mut panels = Vec::new();
-    for method in [base, base.with_spsm()] {
+    for method in [base, base.with_lookup(ShadowLookup::Spsm(SpsmOptions::default()))] {
         let masks = runner.masks_with(&matrix, method.lookup()).map_err(|e| e.to_string())?;
         let c = Counts::compare(&masks, &truth);
         println!(
