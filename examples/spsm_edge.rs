@@ -23,9 +23,9 @@ mod support;
 
 use glam::DVec3;
 use lixel::experiment::{Counts, ExperimentConfig, MethodSpec, Preset, Runner};
-use lixel::render::{ShadowLookup, SpsmOptions};
 use lixel::mesh::raycast::Ray;
 use lixel::mesh::RayCaster;
+use lixel::render::{ShadowLookup, SpsmOptions};
 use lixel::{Light, LightMatrix};
 
 fn main() {
@@ -195,8 +195,7 @@ fn trio(preset: Preset, index: usize, base: MethodSpec, (fov, screen): (f64, u32
         (m, outcome.light, target, runner.camera().eye())
     };
     // The close-up: same eye, narrow field of view, the same matrix.
-    let close =
-        ExperimentConfig { eye: Some(eye), target: Some(window), fov_y_degrees: fov, screen, ..config.clone() };
+    let close = ExperimentConfig { eye: Some(eye), target: Some(window), fov_y_degrees: fov, screen, ..config.clone() };
     let mut runner = Runner::new(&close, &device, &queue).map_err(|e| e.to_string())?;
     let truth = runner.truths(light).map_err(|e| e.to_string())?.0.ok_or("no ray-cast truth")?;
     let mut panels = Vec::new();

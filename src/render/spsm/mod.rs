@@ -145,8 +145,7 @@ pub(crate) fn lookup_source(options: &SpsmOptions) -> String {
 pub fn depth_matrix(matrix: &crate::LightMatrix) -> glam::DMat4 {
     use glam::{DVec4, Vec4Swizzles};
     let m = matrix.clip_from_world;
-    let (crate::DepthRange::Perspective { near, far }, Some(position)) = (matrix.depth, matrix.light.position())
-    else {
+    let (crate::DepthRange::Perspective { near, far }, Some(position)) = (matrix.depth, matrix.light.position()) else {
         return m;
     };
     if !matrix.needs_unclipped_depth {
