@@ -37,7 +37,9 @@ fn spsm_min_depth_at(light: Light, k: vec2<i32>) -> f32 {
     return s / max(1.0 - abs(s), 1e-30);
 }
 
-fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
+// The texel at `k` without its derivatives (spsm_decode_shape); outside
+// the map an empty texel.
+fn spsm_load_shape(light: Light, k: vec2<i32>) -> SpsmTexel {
     if any(k < vec2<i32>(0)) || any(k >= vec2<i32>(light.map_size)) {
         var t: SpsmTexel;
         t.kind = 2u;
@@ -47,12 +49,17 @@ fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
     return spsm_decode_shape(textureLoad(spsm_texels, k, light.layer, 0), k);
 }
 
-// `t`, loaded from texel `k` by spsm_load, with its derivatives.
+// `t`, loaded from texel `k` by spsm_load_shape, with its derivatives.
 fn spsm_slopes(light: Light, t: SpsmTexel, k: vec2<i32>) -> SpsmTexel {
     if t.kind != 0u {
         return t;
     }
     return spsm_with_slopes(t, textureLoad(spsm_texels, k, light.layer, 0), light.map_size);
+}
+
+// The whole texel at `k` (also used by sgsm_lookup.wgsl).
+fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
+    return spsm_slopes(light, spsm_load_shape(light, k), k);
 }
 
 // Consistent depth test of a whole texel: its triangle's minimum depth over
@@ -199,7 +206,7 @@ fn spsm_side(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>, n: vec2<f32
         if (pattern & (1u << i)) == 0u {
             continue;
         }
-        let t = spsm_load(light, k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1));
+        let t = spsm_load_shape(light, k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1));
         if t.kind != 0u {
             continue;
         }
@@ -268,7 +275,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let p = m.xy;
     let k = map_texel(light, p);
     let zeta = m.z;
-    let own = spsm_slopes(light, spsm_load(light, k), k);
+    let own = spsm_load(light, k);
     if own.kind == 2u {
         return false;
     }
@@ -297,7 +304,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         var t = own;
         let ki = k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1);
         if i != 4u {
-            t = spsm_load(light, ki);
+            t = spsm_load_shape(light, ki);
             if t.kind == 0u && spsm_inside(t, p) {
                 let plane = spsm_plane_at(spsm_slopes(light, t, ki), p);
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {

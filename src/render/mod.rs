@@ -625,8 +625,9 @@ impl Renderer {
     /// Light intensity is split so that n lights add up to 1.
     fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
-        // The SPSM pass and lookup compare in a depth of their own (see spsm::depth_matrix).
-        let spsm = matches!(frame.lookup, ShadowLookup::Spsm(_));
+        // The SPSM pass and lookup (SGSM builds on both) compare in a depth of their own (see
+        // spsm::depth_matrix).
+        let spsm = matches!(frame.lookup, ShadowLookup::Spsm(_) | ShadowLookup::Sgsm(_));
         let for_lookup = |m: &LightMatrix| {
             if spsm {
                 LightMatrix { clip_from_world: spsm::depth_matrix(m), ..*m }
