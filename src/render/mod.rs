@@ -663,6 +663,16 @@ impl Renderer {
     fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
         let cascade = |i: usize| self.cascades.get(i).and_then(Option::as_ref);
+        // The SPSM pass and lookup (SGSM builds on both) compare in a depth of their own (see
+        // spsm::depth_matrix).
+        let spsm = matches!(frame.lookup, ShadowLookup::Spsm(_) | ShadowLookup::Sgsm(_));
+        let for_lookup = |m: &LightMatrix| {
+            if spsm {
+                LightMatrix { clip_from_world: spsm::depth_matrix(m), ..*m }
+            } else {
+                *m
+            }
+        };
         let raw_lights = |lights: &[LightMatrix], layer: &dyn Fn(usize) -> u32| -> Vec<LightRaw> {
             // A sun's cascades count once.
             let suns = (0..lights.len()).filter(|&i| cascade(i).is_none_or(|c| c.first)).count();
@@ -671,7 +681,7 @@ impl Renderer {
                 .iter()
                 .enumerate()
                 .map(|(i, m)| {
-                    let raw = LightRaw::to_raw(m, layer(i), color);
+                    let raw = LightRaw::to_raw(&for_lookup(m), layer(i), color);
                     cascade(i).map_or(raw, |c| raw.with_cascade(c))
                 })
                 .collect()
@@ -704,7 +714,7 @@ impl Renderer {
             self.queue.write_buffer(&self.analysis_lights, 0, bytemuck::bytes_of(&lights));
         }
         let shadow_raw: Vec<ShadowPassRaw> =
-            slots.maps.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
+            slots.maps.iter().map(|m| ShadowPassRaw::to_raw(&for_lookup(m), &self.options.bias)).collect();
         if !shadow_raw.is_empty() {
             let state = &self.lookups[slots.lookup];
             self.queue.write_buffer(&state.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
