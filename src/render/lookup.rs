@@ -15,6 +15,7 @@ use std::borrow::Cow;
 
 use super::passes::{AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SHADOW_SLOTS};
 use super::spsm::{self, SpsmOptions};
+use super::subpixel::AaSamples;
 use super::uniforms::{ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
 
 /// How the camera and analysis passes look a point up in a light's map.
@@ -31,11 +32,23 @@ pub enum ShadowLookup {
     /// (`shaders/spsm_pass.wgsl`), looked up with the triangles' planes and
     /// the paper's silhouette recovery (`shaders/spsm_lookup.wgsl`).
     Spsm(SpsmOptions),
+    /// Sub-pixel antialiased shadows (Pan et al. 2009; see
+    /// [`subpixel`](super::subpixel)): the depth compare's maps and shadow
+    /// bit, plus compute passes after the camera pass that give every pixel
+    /// an occlusion word over the pattern's sub-samples
+    /// ([`Renderer::read_occlusion`](super::Renderer::read_occlusion)).
+    SubPixelAa(AaSamples),
 }
 
 impl ShadowLookup {
     /// Every lookup mode (SPSM with its default options).
-    pub const ALL: [ShadowLookup; 2] = [ShadowLookup::DepthCompare, ShadowLookup::Spsm(SpsmOptions::PAPER)];
+    pub const ALL: [ShadowLookup; 5] = [
+        ShadowLookup::DepthCompare,
+        ShadowLookup::Spsm(SpsmOptions::PAPER),
+        ShadowLookup::SubPixelAa(AaSamples::X8),
+        ShadowLookup::SubPixelAa(AaSamples::X16),
+        ShadowLookup::SubPixelAa(AaSamples::X32),
+    ];
 
     /// A short stable name (for file names, CSV and logs).
     #[must_use]
@@ -43,6 +56,9 @@ impl ShadowLookup {
         match self {
             Self::DepthCompare => "depth-compare",
             Self::Spsm(_) => "spsm",
+            Self::SubPixelAa(AaSamples::X8) => "aa8",
+            Self::SubPixelAa(AaSamples::X16) => "aa16",
+            Self::SubPixelAa(AaSamples::X32) => "aa32",
         }
     }
 
@@ -56,7 +72,9 @@ impl ShadowLookup {
     /// The three parts a mode provides.
     fn spec(self) -> LookupSpec {
         match self {
-            Self::DepthCompare => LookupSpec {
+            // The antialiased mode's bit is the depth compare's; its
+            // sub-pixel work runs after the camera pass (subpixel::gpu).
+            Self::DepthCompare | Self::SubPixelAa(_) => LookupSpec {
                 map_color: None,
                 shadow_wgsl: Cow::Borrowed(include_str!("../../shaders/shadow.wgsl")),
                 lookup_wgsl: Cow::Borrowed(include_str!("../../shaders/lookup_depth_compare.wgsl")),
