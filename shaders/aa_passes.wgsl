@@ -371,13 +371,31 @@ fn plane_through_light(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(n, -dot(n, a));
 }
 
+// Whether the origin (the pixel's point) lies on triangle v (within `tol` of its plane and of its
+// inside): the pixel's own triangle, which must not shadow its facet.
+fn holds(v: array<vec3<f32>, 3>, normal: vec3<f32>, scale: f32, tol: f32) -> bool {
+    if abs(dot(normal, v[0])) > tol * scale {
+        return false;
+    }
+    for (var k = 0u; k < 3u; k++) {
+        let p = v[k];
+        let edge = cross(normal, v[(k + 1u) % 3u] - p);
+        let inside = sign(dot(edge, v[(k + 2u) % 3u] - p));
+        if -dot(edge, p) * inside < -tol * length(edge) {
+            return false;
+        }
+    }
+    return true;
+}
+
 // The occluded samples of a facet (columns c0, c1, c2) by triangle t:
 // `facet::shadow_half_spaces` and `occluded_mask` for one triangle.
-fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32) -> u32 {
-    let v = array<vec3<f32>, 3>(vertex(t, 0u), vertex(t, 1u), vertex(t, 2u));
+fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32, point: vec3<f32>) -> u32 {
+    // In the facet's frame, centred on the pixel's point.
+    let v = array<vec3<f32>, 3>(vertex(t, 0u) - point, vertex(t, 1u) - point, vertex(t, 2u) - point);
     let normal = cross(v[1] - v[0], v[2] - v[0]);
     let scale = length(normal);
-    if !(scale > 0.0) {
+    if !(scale > 0.0) || holds(v, normal, scale, bias) {
         return 0u;
     }
     var mask = ALL_SAMPLES;
@@ -419,6 +437,13 @@ fn unpack_normal(word: u32) -> vec3<f32> {
     return normalize(n);
 }
 
+// The near-plane point of pixel (px, py) at pixel-local offset s.
+fn pixel_near(px: u32, py: u32, s: vec2<f32>, size: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>((f32(px) + s.x) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + s.y) / size.y * 2.0);
+    let h = camera.world_from_clip * vec4<f32>(ndc, 0.0, 1.0);
+    return h.xyz / h.w;
+}
+
 @compute @workgroup_size(64)
 fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = flat_id(gid, groups);
@@ -438,23 +463,26 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
         return;
     }
     let light = lights.items[params.light];
-    // The pixel's facet (facet.rs, Facet::new) from its centre's depth and normal.
     let size = vec2<f32>(f32(params.width), f32(params.height));
     let centre_ndc = vec2<f32>((f32(px) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + 0.5) / size.y * 2.0);
     let hp = camera.world_from_clip * vec4<f32>(centre_ndc, depth, 1.0);
     let point = hp.xyz / hp.w;
     let n = unpack_normal(words.w);
-    let plane = vec4<f32>(n, -dot(n, point));
-    let eye = camera.world_from_clip * vec4<f32>(0.0, 0.0, 1.0, 0.0);
-    let d0 = camera.world_from_clip * vec4<f32>(2.0 / size.x, 0.0, 0.0, 0.0);
-    let d1 = camera.world_from_clip * vec4<f32>(0.0, -2.0 / size.y, 0.0, 0.0);
-    let d2 = camera.world_from_clip
-        * vec4<f32>(2.0 * f32(px) / size.x - 1.0, 1.0 - 2.0 * f32(py) / size.y, 0.0, 1.0);
-    let pc = dot(plane, eye);
+    // The pixel's facet (facet.rs, Facet::new) in a frame centred on its
+    // point (f32 loses too much on far pixels in world coordinates): view
+    // rays D(s) = D0 s.x + D1 s.y + D2 from the eye E through the pixel's
+    // near-plane points meet the plane n.x = 0 at
+    // X(s) = ((n.D(s)) E - (n.E) D(s), n.D(s)), linear in s.
+    let near = pixel_near(px, py, vec2<f32>(0.0), size);
+    let d0 = pixel_near(px, py, vec2<f32>(1.0, 0.0), size) - near;
+    let d1 = pixel_near(px, py, vec2<f32>(0.0, 1.0), size) - near;
+    let d2 = near - camera.eye.xyz;
+    let eye = camera.eye.xyz - point;
+    let ne = dot(n, eye);
     var cols = array<vec4<f32>, 3>(
-        pc * d0 - dot(plane, d0) * eye,
-        pc * d1 - dot(plane, d1) * eye,
-        pc * d2 - dot(plane, d2) * eye,
+        vec4<f32>(dot(n, d0) * eye - ne * d0, dot(n, d0)),
+        vec4<f32>(dot(n, d1) * eye - ne * d1, dot(n, d1)),
+        vec4<f32>(dot(n, d2) * eye - ne * d2, dot(n, d2)),
     );
     let mid = cols[0] * 0.5 + cols[1] * 0.5 + cols[2];
     if !(abs(mid.w) > 0.0) {
@@ -463,6 +491,8 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if mid.w < 0.0 {
         cols = array<vec4<f32>, 3>(-cols[0], -cols[1], -cols[2]);
     }
+    // The light in the local frame.
+    let l = vec4<f32>(light.position.xyz - point * light.position.w, light.position.w);
     // Corners: in front of the camera and the light; footprint in texels.
     var lo = vec2<f32>(1e30);
     var hi = vec2<f32>(-1e30);
@@ -474,12 +504,17 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
         if !(x.w > 0.0) {
             return;
         }
-        let world = x.xyz / x.w;
-        if k == 0u {
-            first = world;
-        } else {
-            diameter = max(diameter, distance(world, first));
+        let local = x.xyz / x.w;
+        // In front of the camera, as Facet::new asks.
+        if !(dot(local - eye, d0 * s.x + d1 * s.y + d2) > 0.0) {
+            return;
         }
+        if k == 0u {
+            first = local;
+        } else {
+            diameter = max(diameter, distance(local, first));
+        }
+        let world = local + point;
         let clip = light.clip_from_world * vec4<f32>(world, 1.0);
         if !(clip.w > 0.0) {
             return;
@@ -518,9 +553,10 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             }
         }
     }
-    // The receiver's own triangle lies in the facet's plane only up to the
-    // normal's interpolation: the bias grows with the facet's size.
-    let bias = max(params.bias, diameter);
+    // Triangles holding the pixel's own point (its triangle) are skipped; the others' planes are pushed away from the
+    // light by the scene bias plus a hundredth of the facet's size (the
+    // depth buffer's error in the reconstructed point).
+    let bias = params.bias + 0.01 * diameter;
     var occluded = 0u;
     var tests = 0u;
     for (var ty = ta.y; ty <= tb.y; ty++) {
@@ -530,7 +566,7 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             let count = atomicLoad(&tile_words[count_slot(tile)]);
             tests += count;
             for (var k = 0u; k < count; k++) {
-                occluded |= triangle_mask(tile_list[start + k], cols, light.position, bias);
+                occluded |= triangle_mask(tile_list[start + k], cols, l, bias, point);
                 if (occluded & params.sample_mask) == params.sample_mask {
                     break;
                 }
