@@ -684,6 +684,23 @@ impl<'a> Runner<'a> {
                         (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
                         _ => None,
                     };
+                    // The antialiased passes' counts go to the note (pair-list
+                    // use and the pixels that kept the standard bit).
+                    let note = match method.lookup() {
+                        ShadowLookup::SubPixelAa(_) => {
+                            let s = self.renderer.read_aa_stats(0)?;
+                            let aa = format!(
+                                "aa pairs {} exact {} overflow {} wide {}",
+                                s.pairs, s.exact_pixels, s.overflow_pixels, s.wide_pixels
+                            );
+                            if note.is_empty() {
+                                aa
+                            } else {
+                                format!("{note}; {aa}")
+                            }
+                        }
+                        _ => note,
+                    };
                     MethodResult {
                         matrix: Some(m),
                         counts: Some(Counts::compare(&masks, &truth)),
