@@ -379,7 +379,7 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
     let mut md = String::from("# Temporal stability\n\n");
     let _ = writeln!(
         md,
-        "{} frames: a walk of {:.0} % of the scene diagonal while turning {}°; {:?}, {}² screen, {}² map, one {:?} \
+        "{} frames: a walk of {:.0} % of the scene diagonal while turning {}°; scene {}, {}² screen, {}² map, one {} \
          light (configuration 0), ray-cast truth. Flicker: share of pixels counted in two consecutive frames, whose \
          truth did not change, whose shadow bit did (mean and 95th percentile over the frame transitions). Shimmer: the \
          part the map change alone causes (the previous frame's matrix rendered from this frame's camera against \
@@ -387,10 +387,10 @@ pub fn markdown(config: &ExperimentConfig, path: &CameraPath, rows: &[StabilityR
         path.frames,
         path.walk * 100.0,
         path.turn_degrees,
-        config.scene,
+        serde_json::to_string(&config.scene).unwrap_or_default(),
         config.screen,
         config.map,
-        config.light
+        serde_json::to_string(&config.light).unwrap_or_default().trim_matches('"')
     );
     md.push_str(
         "| method | mean flicker | p95 flicker | mean shimmer | misclassified / frame |\n|---|---:|---:|---:|---:|\n",
