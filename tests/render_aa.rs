@@ -198,3 +198,40 @@ fn sample_counts_and_errors() {
     }
     assert!(renderer.read_occlusion(1).is_err());
 }
+
+/// The overflow policy: with room for a tenth of the pairs, pixels whose
+/// tiles' lists did not fit keep the standard bit in every sample and are
+/// counted; the words of every other pixel are unchanged.
+#[test]
+fn overflowing_lists_keep_the_standard_bit() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let cam = camera(64);
+    let m = matrices(&scene, &cam, &test_lights()[..1], 128, &Parameterization::Focused)[0];
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    renderer.render(&Frame { masks: true, lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
+    let full = renderer.read_occlusion(0).unwrap();
+    let full_stats = renderer.read_aa_stats(0).unwrap();
+    let masks = renderer.read_masks().unwrap();
+    assert_eq!(full_stats.overflow_pixels, 0);
+    renderer.set_aa_pair_capacity(full_stats.pairs / 10).unwrap();
+    renderer.render(&Frame { masks: true, lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
+    let cut = renderer.read_occlusion(0).unwrap();
+    let stats = renderer.read_aa_stats(0).unwrap();
+    assert_eq!(stats.pairs, full_stats.pairs, "pairs wanted do not depend on the room");
+    assert!(stats.overflow_pixels > 0, "{stats:?}");
+    // Pixels on the exact path, overflowing or wide: the same set either way
+    // (a footprint's tiles are checked in order, so a pixel may move from
+    // wide to overflow).
+    let off_standard = |s: &lixel::render::subpixel::gpu::AaStats| s.exact_pixels + s.overflow_pixels + s.wide_pixels;
+    assert_eq!(off_standard(&stats), off_standard(&full_stats), "{stats:?} {full_stats:?}");
+    let mut changed = 0;
+    for i in 0..cut.len() {
+        if cut[i] != full[i] {
+            changed += 1;
+            let standard = if masks.shadow[i] & 1 != 0 { u32::MAX } else { 0 };
+            assert_eq!(cut[i], standard, "pixel {i}: a changed word must be the standard bit");
+        }
+    }
+    assert!(changed > 0 && changed <= stats.overflow_pixels as usize, "{changed} changed, {stats:?}");
+}

@@ -148,6 +148,8 @@ pub(crate) struct AaPass {
     sized: Option<Sized>,
     bias: f32,
     last: Option<LastFrame>,
+    /// List entries per light actually used (at most [`PAIR_CAPACITY`]).
+    capacity: u32,
 }
 
 const ENTRY_POINTS: [&str; 7] =
@@ -271,6 +273,7 @@ impl AaPass {
             sized: None,
             bias,
             last: None,
+            capacity: PAIR_CAPACITY,
         }
     }
 
@@ -378,7 +381,7 @@ impl AaPass {
                 light: i as u32,
                 tiles_x: tx,
                 tiles_y: ty,
-                capacity: PAIR_CAPACITY,
+                capacity: self.capacity,
                 width,
                 height,
                 edge_count: self.edge_count,
@@ -506,6 +509,20 @@ impl Renderer {
         };
         staging.unmap();
         Ok(words)
+    }
+
+    /// Limits the triangle–tile lists to `entries` per light (clamped to
+    /// `1..=`[`PAIR_CAPACITY`]; the default is the maximum), from the next
+    /// frame on: a way to see the overflow policy at work.
+    ///
+    /// # Errors
+    /// Device errors building the passes.
+    pub fn set_aa_pair_capacity(&mut self, entries: u32) -> Result<(), RenderError> {
+        self.ensure_aa()?;
+        if let Some(aa) = self.aa.as_mut() {
+            aa.capacity = entries.clamp(1, PAIR_CAPACITY);
+        }
+        Ok(())
     }
 
     /// Builds the antialiased passes on first use.
