@@ -293,11 +293,9 @@ pub struct Renderer {
     /// Light `i` is a cascade owning view depths `depth_ranges[i]`
     /// ([`Renderer::set_cascades`]).
     depth_ranges: Vec<Option<(f32, f32)>>,
-    /// The antialiased lookup's passes, built on its first frame from
-    /// `aa_mesh` (the scene's positions and indices, merged) with blocker
-    /// bias `aa_bias` (world units).
+    /// The antialiased lookup's passes, built on its first frame (from the
+    /// scene buffers read back) with blocker bias `aa_bias` (world units).
     aa: Option<subpixel::gpu::AaPass>,
-    aa_mesh: crate::mesh::Mesh,
     aa_bias: f32,
 }
 
@@ -364,23 +362,25 @@ impl Renderer {
             }));
             indices.extend(object.mesh.indices.iter().map(|i| i + base));
         }
-        let aa_mesh = crate::mesh::Mesh {
-            positions: vertices.iter().map(|v| Vec3::from_array(v.position)).collect(),
-            normals: Vec::new(),
-            indices: indices.clone(),
-        };
-        let aa_bias = (1e-4 * aa_mesh.bounds().map_or(1.0, |b| b.diagonal())) as f32;
+        let aa_bias = (1e-4
+            * scene
+                .objects
+                .iter()
+                .filter_map(|o| o.mesh.bounds())
+                .reduce(|a, b| a.union(&b))
+                .map_or(1.0, |b| b.diagonal())) as f32;
         let gpu_scene = device::capture(device, "scene upload", || GpuScene {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
-                // Storage: the SPSM pass pulls whole triangles.
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+                // Storage: the SPSM pass pulls whole triangles; copy: the
+                // antialiased lookup reads the positions back once.
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             }),
             indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene indices"),
                 contents: bytemuck::cast_slice(&indices),
-                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             }),
             index_count: indices.len() as u32,
             objects,
@@ -447,7 +447,6 @@ impl Renderer {
             last_lookup: None,
             depth_ranges: Vec::new(),
             aa: None,
-            aa_mesh,
             aa_bias,
             options,
             errors,

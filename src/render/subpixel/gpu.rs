@@ -528,9 +528,19 @@ impl Renderer {
     /// Builds the antialiased passes on first use.
     pub(crate) fn ensure_aa(&mut self) -> Result<(), RenderError> {
         if self.aa.is_none() {
+            // The scene's positions and indices as uploaded (no CPU copy is
+            // kept for a mode most renderers never use).
+            let words = self.read_buffer_words(&self.scene.vertices, 0, self.scene.vertices.size() / 4)?;
+            let positions = words
+                .chunks_exact(7)
+                .map(|v| glam::Vec3::new(f32::from_bits(v[0]), f32::from_bits(v[1]), f32::from_bits(v[2])));
+            let mesh = Mesh {
+                positions: positions.collect(),
+                normals: Vec::new(),
+                indices: self.read_buffer_words(&self.scene.indices, 0, u64::from(self.scene.index_count))?,
+            };
             let bias = self.aa_bias;
-            let aa =
-                device::capture(&self.device, "antialiased passes", || AaPass::new(&self.device, &self.aa_mesh, bias))?;
+            let aa = device::capture(&self.device, "antialiased passes", || AaPass::new(&self.device, &mesh, bias))?;
             self.aa = Some(aa);
         }
         Ok(())
