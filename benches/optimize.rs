@@ -107,7 +107,8 @@ fn by_lights(c: &mut Criterion) {
 }
 
 /// Sample extraction alone for 1/4/32 lights at 180x180: one light at a
-/// time (`from_readback` per light) and all lights in one pass.
+/// time (`from_readback` per light), all lights in one pass, and all lights
+/// into reused samples (`from_readback_all_into`).
 fn extraction(c: &mut Criterion) {
     let mut group = c.benchmark_group("optimize/extract_180x180");
     group.sample_size(20);
@@ -137,6 +138,23 @@ fn extraction(c: &mut Criterion) {
                     .iter()
                     .map(|samples| samples.boundary().len())
                     .sum::<usize>()
+            });
+        });
+        // Into the previous iteration's samples and workspace (an engine's
+        // frame loop): the same work without allocation once warm.
+        group.bench_with_input(BenchmarkId::new("all_lights_into", lights), &setup, |b, s| {
+            let readback = s.readback.as_readback(false);
+            let (mut out, mut workspace) = (Vec::new(), optimize::SampleWorkspace::new());
+            b.iter(|| {
+                Samples::from_readback_all_into(
+                    &s.problems,
+                    &readback,
+                    &SampleOptions::default(),
+                    &mut out,
+                    &mut workspace,
+                )
+                .expect("samples");
+                out.iter().map(|samples| samples.boundary().len()).sum::<usize>()
             });
         });
     }

@@ -69,6 +69,7 @@ pub mod synthetic;
 mod tolerance;
 #[cfg(feature = "view")]
 pub mod view;
+mod workspace;
 
 pub use camera::{Camera, INFINITE_FAR_CORNER_RATIO};
 pub use error::{LixelError, Result};
@@ -82,3 +83,4 @@ pub use optimize::{optimize_light_matrix, OptimizeOptions, OptimizeReport, Optim
 pub use problem::ShadowProblem;
 pub use scene::{Aabb, SceneBounds, ShadowMapSize};
 pub use tolerance::{Tolerances, MAX_COORDINATE, MAX_LIGHTS};
+pub use workspace::SolveWorkspace;

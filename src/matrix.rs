@@ -318,21 +318,22 @@ impl Placement<'_> {
     /// the map and the depth range (to [`Tolerances::coverage_slack`]) in
     /// world coordinates; [`LixelError::UnusableSamples`] when there
     /// are no focus points.
-    pub(crate) fn build(&self, workspace: &mut FitWorkspace) -> Result<LightMatrix> {
-        let xs: Vec<DVec3> = self.focus.iter().map(|&p| self.frame.homogeneous(p)).collect();
+    pub(crate) fn build_in(&self, ws: &mut crate::workspace::SolveWorkspace) -> Result<LightMatrix> {
+        let crate::workspace::SolveWorkspace { fit, xs, image, .. } = ws;
+        xs.clear();
+        xs.extend(self.focus.iter().map(|&p| self.frame.homogeneous(p)));
         if xs.is_empty() {
             return Err(LixelError::UnusableSamples { reason: "no points to fit the map around" });
         }
-        let mut scratch = Vec::with_capacity(xs.len());
         let homography = fit_homography(
             &AxisFit { frame: &self.frame, map: self.map, fit: self.fit, tolerances: self.tolerances },
             self.axis,
-            &xs,
-            workspace,
-            &mut scratch,
+            xs,
+            fit,
+            image,
         )
         .ok_or(LixelError::NotInFront { method: self.method })?;
-        self.finish_checked(homography, &xs)
+        self.finish_checked(homography, xs)
     }
 
     /// [`finish`](Self::finish), then checked: every focus and depth point

@@ -5,12 +5,13 @@ use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::error::{check_range, Result};
-use crate::fit::{AffineFitOptions, FitWorkspace};
+use crate::fit::AffineFitOptions;
 use crate::geometry::{ConvexPolyhedron, Plane};
 use crate::light::{Light, LightFrame};
 use crate::matrix::{Fallback, LightMatrix, Method, Placement};
 use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
 use crate::tolerance::Tolerances;
+use crate::workspace::{with_workspace, SolveWorkspace};
 
 /// Sides of the pyramid that stands in for a spot light's cone (it
 /// circumscribes the cone, so it never loses a lit point).
@@ -162,36 +163,45 @@ impl ShadowProblem {
     /// the spot's whole frustum, which contains the body.
     #[must_use]
     pub fn mappable_vertices(&self, body: &ConvexPolyhedron) -> Vec<DVec3> {
+        let mut out = Vec::new();
+        with_workspace(|ws| self.mappable_vertices_into(body, &mut out, ws));
+        out
+    }
+
+    /// [`Self::mappable_vertices`] into `out` (cleared first).
+    pub(crate) fn mappable_vertices_into(
+        &self,
+        body: &ConvexPolyhedron,
+        out: &mut Vec<DVec3>,
+        ws: &mut SolveWorkspace,
+    ) {
+        out.clear();
         let Some(l) = self.light.position() else {
-            return body.vertices().to_vec();
+            out.extend_from_slice(body.vertices());
+            return;
         };
         let at_light = self.coarse_eps();
-        let far: Vec<DVec3> = body.vertices().iter().copied().filter(|&p| (p - l).length() > at_light).collect();
-        match self.light {
-            Light::Spot { direction, .. } if far.is_empty() && !body.is_empty() => {
-                let planes = self.light_planes();
-                (0..planes.len())
-                    .filter_map(|k| {
-                        let ray = planes[k].normal.cross(planes[(k + 1) % planes.len()].normal).try_normalize()?;
-                        let ray = if ray.dot(direction) < 0.0 { -ray } else { ray };
-                        Some(l + ray * (2.0 * at_light))
-                    })
-                    .collect()
+        out.extend(body.vertices().iter().copied().filter(|&p| (p - l).length() > at_light));
+        if let Light::Spot { direction, .. } = self.light {
+            if out.is_empty() && !body.is_empty() {
+                let mut planes = ws.take_planes();
+                self.light_planes_into(&mut planes);
+                out.extend((0..planes.len()).filter_map(|k| {
+                    let ray = planes[k].normal.cross(planes[(k + 1) % planes.len()].normal).try_normalize()?;
+                    let ray = if ray.dot(direction) < 0.0 { -ray } else { ray };
+                    Some(l + ray * (2.0 * at_light))
+                }));
+                ws.put_planes(planes);
             }
-            _ => far,
         }
     }
 
     /// The view frustum `V` as the six half-spaces of the camera's clip volume.
     #[must_use]
     pub fn view_planes(&self) -> Vec<Plane> {
-        let m = self.camera.clip_from_world();
-        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
-        // Inside: h·[x; 1] >= 0 for each of these (a Plane keeps the other sign).
-        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
-            .into_iter()
-            .filter_map(|h| Plane::from_homogeneous(-h))
-            .collect()
+        let mut planes = Vec::new();
+        view_planes_into(&self.camera, &mut planes);
+        planes
     }
 
     /// The view frustum `V` as a polyhedron (may be huge for a far far plane;
@@ -199,8 +209,27 @@ impl ShadowProblem {
     /// always finite).
     #[must_use]
     pub fn view_body(&self) -> ConvexPolyhedron {
-        let corners = self.camera.frustum_corners_within(&self.bounds.scene());
-        ConvexPolyhedron::from_frustum_corners(&corners).unwrap_or_else(ConvexPolyhedron::empty)
+        with_workspace(|ws| {
+            self.prepare_view_body(ws);
+            ws.view.view_body.clone().unwrap_or_default()
+        })
+    }
+
+    /// Makes the workspace's camera cache hold this problem's camera and
+    /// bounds (its view planes are then `ws.view.planes`).
+    fn prepare_view(&self, ws: &mut SolveWorkspace) {
+        let camera = &self.camera;
+        ws.view.prepare(camera, &self.bounds, self.eps(), |planes| view_planes_into(camera, planes));
+    }
+
+    /// [`Self::prepare_view`], and the view body computed (`ws.view.view_body`).
+    fn prepare_view_body(&self, ws: &mut SolveWorkspace) {
+        self.prepare_view(ws);
+        if ws.view.view_body.is_none() {
+            let mut body = ws.view.spare_body();
+            body.set_frustum_corners(&self.camera.frustum_corners_within(&self.bounds.scene()));
+            ws.view.view_body = Some(body);
+        }
     }
 
     /// The light's own frustum `L` as half-spaces: empty (everything) for
@@ -208,79 +237,149 @@ impl ShadowProblem {
     /// spot lights.
     #[must_use]
     pub fn light_planes(&self) -> Vec<Plane> {
+        let mut planes = Vec::new();
+        self.light_planes_into(&mut planes);
+        planes
+    }
+
+    /// [`Self::light_planes`] into `out` (cleared first).
+    fn light_planes_into(&self, out: &mut Vec<Plane>) {
+        out.clear();
         let Light::Spot { position, direction, outer_half_angle_radians } = self.light else {
-            return Vec::new();
+            return;
         };
         let (e1, e2) = direction.any_orthonormal_pair();
         let (sin_a, cos_a) = outer_half_angle_radians.sin_cos();
-        (0..SPOT_PYRAMID_SIDES)
-            .map(|k| {
-                let phi = std::f64::consts::TAU * k as f64 / SPOT_PYRAMID_SIDES as f64;
-                let radial = e1 * phi.cos() + e2 * phi.sin();
-                // Tangent to the cone along `radial`, pointing outwards.
-                Plane::from_point_normal(position, (radial * cos_a - direction * sin_a).normalize())
-            })
-            .collect()
+        out.extend((0..SPOT_PYRAMID_SIDES).map(|k| {
+            let phi = std::f64::consts::TAU * k as f64 / SPOT_PYRAMID_SIDES as f64;
+            let radial = e1 * phi.cos() + e2 * phi.sin();
+            // Tangent to the cone along `radial`, pointing outwards.
+            Plane::from_point_normal(position, (radial * cos_a - direction * sin_a).normalize())
+        }));
     }
 
-    /// A box as a polyhedron, clipped by the light frustum `L`.
-    fn box_in_light(&self, aabb: &Aabb) -> ConvexPolyhedron {
-        ConvexPolyhedron::from_aabb(aabb.min, aabb.max).clip_all(self.light_planes().iter(), self.eps())
+    /// A box as a polyhedron, clipped by the light frustum `L`, into `out`.
+    fn box_in_light_into(&self, aabb: &Aabb, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
+        out.set_aabb(aabb.min, aabb.max);
+        let mut planes = ws.take_planes();
+        self.light_planes_into(&mut planes);
+        out.clip_all_in_place(planes.iter(), self.eps(), &mut ws.clip);
+        ws.put_planes(planes);
     }
 
     /// All receivers the light can reach: `R ∩ L` (what a normal map covers).
     #[must_use]
     pub fn receiver_body(&self) -> ConvexPolyhedron {
-        self.box_in_light(&self.bounds.receivers)
+        let mut body = ConvexPolyhedron::empty();
+        with_workspace(|ws| self.receiver_body_into(&mut body, ws));
+        body
+    }
+
+    /// [`Self::receiver_body`] into `out`.
+    pub(crate) fn receiver_body_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
+        self.box_in_light_into(&self.bounds.receivers, out, ws);
     }
 
     /// The visible receivers the light can reach: `V ∩ R ∩ L`. Every method's
     /// map must contain this body.
     #[must_use]
     pub fn visible_receiver_body(&self) -> ConvexPolyhedron {
-        self.receiver_body().clip_all(self.view_planes().iter(), self.eps())
+        let mut body = ConvexPolyhedron::empty();
+        with_workspace(|ws| self.visible_receiver_body_into(&mut body, ws));
+        body
+    }
+
+    /// [`Self::visible_receiver_body`] into `out`. Without a light frustum
+    /// (point and directional lights) this is `V ∩ R`, taken from the
+    /// workspace's camera cache when it holds it.
+    pub(crate) fn visible_receiver_body_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
+        self.prepare_view(ws);
+        let own_frustum = matches!(self.light, Light::Spot { .. });
+        if !own_frustum {
+            if let Some(visible) = &ws.view.visible {
+                out.copy_from(visible);
+                return;
+            }
+        }
+        self.receiver_body_into(out, ws);
+        out.clip_all_in_place(ws.view.planes.iter(), self.eps(), &mut ws.clip);
+        if !own_frustum {
+            let mut cached = ws.view.spare_body();
+            cached.copy_from(out);
+            ws.view.visible = Some(cached);
+        }
     }
 
     /// PSM's hull `H = conv(V ∪ l) ∩ S ∩ L` (for a directional light, `V`
     /// extruded towards the light).
     #[must_use]
     pub fn psm_hull(&self) -> ConvexPolyhedron {
-        let view = self.view_body();
+        let mut body = ConvexPolyhedron::empty();
+        with_workspace(|ws| self.psm_hull_into(&mut body, ws));
+        body
+    }
+
+    /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera cache.
+    pub(crate) fn psm_hull_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
+        self.prepare_view_body(ws);
+        let view = ws.view.view_body.take().unwrap_or_default();
         if view.is_empty() {
-            return ConvexPolyhedron::empty();
+            out.clear();
+        } else {
+            let mut planes = ws.take_planes();
+            self.towards_light_planes_into(&view, &mut planes, ws);
+            self.box_in_light_into(&self.bounds.scene(), out, ws);
+            out.clip_all_in_place(planes.iter(), self.eps(), &mut ws.clip);
+            ws.put_planes(planes);
         }
-        let planes = self.towards_light_planes(&view);
-        self.box_in_light(&self.bounds.scene()).clip_all(planes.iter(), self.eps())
+        ws.view.view_body = Some(view);
     }
 
     /// The casters that can shadow `focus`: `conv(focus ∪ l) ∩ C` (point and
     /// spot lights) or `focus` extruded towards the light `∩ C` (directional).
     #[must_use]
     pub fn caster_body(&self, focus: &ConvexPolyhedron) -> ConvexPolyhedron {
+        let mut body = ConvexPolyhedron::empty();
+        with_workspace(|ws| self.caster_body_into(focus, &mut body, ws));
+        body
+    }
+
+    /// [`Self::caster_body`] into `out`.
+    pub(crate) fn caster_body_into(
+        &self,
+        focus: &ConvexPolyhedron,
+        out: &mut ConvexPolyhedron,
+        ws: &mut SolveWorkspace,
+    ) {
         if focus.is_empty() {
-            return ConvexPolyhedron::empty();
+            out.clear();
+            return;
         }
-        let planes = self.towards_light_planes(focus);
-        ConvexPolyhedron::from_aabb(self.bounds.casters.min, self.bounds.casters.max)
-            .clip_all(planes.iter(), self.eps())
+        let mut planes = ws.take_planes();
+        self.towards_light_planes_into(focus, &mut planes, ws);
+        out.set_aabb(self.bounds.casters.min, self.bounds.casters.max);
+        out.clip_all_in_place(planes.iter(), self.eps(), &mut ws.clip);
+        ws.put_planes(planes);
     }
 
     /// Half-spaces of `body` grown towards the light (hull with the light's
-    /// position, or extrusion along the reversed light direction).
+    /// position, or extrusion along the reversed light direction), into `out`.
     ///
     /// Each is moved out by twice the plane tolerance: the bodies clipped by
     /// them must *contain* what they stand for, and a clip drops what is at
     /// most `eps` thick. A light in (or grazing) the plane of a flat receiver
     /// (a sunset over a floor) makes `conv(focus ∪ l)` exactly such a sliver,
     /// and its casters must still reach the depth row.
-    fn towards_light_planes(&self, body: &ConvexPolyhedron) -> Vec<Plane> {
-        let planes = match self.light {
-            Light::Directional { direction } => body.extrusion_planes(-direction, self.eps()),
+    fn towards_light_planes_into(&self, body: &ConvexPolyhedron, out: &mut Vec<Plane>, ws: &mut SolveWorkspace) {
+        match self.light {
+            Light::Directional { direction } => body.extrusion_planes_into(-direction, self.eps(), out, &mut ws.clip),
             Light::Point { position } | Light::Spot { position, .. } => {
-                body.hull_with_point_planes(position, self.eps())
+                body.hull_with_point_planes_into(position, self.eps(), out, &mut ws.clip);
             }
-        };
-        planes.into_iter().map(|p| p.grown(2.0 * self.eps())).collect()
+        }
+        for plane in out.iter_mut() {
+            *plane = plane.grown(2.0 * self.eps());
+        }
     }
 
     /// The light frame used for a body to be mapped: a spot light's own axis,
@@ -309,11 +408,17 @@ impl ShadowProblem {
         focus: &ConvexPolyhedron,
         method: Method,
         fallback: Option<Fallback>,
+        ws: &mut SolveWorkspace,
     ) -> Result<LightMatrix> {
-        self.place_with_casters(frame, axis, focus, &self.caster_body(focus), method, fallback)
+        let mut casters = ws.take_body();
+        self.caster_body_into(focus, &mut casters, ws);
+        let result = self.place_with_casters(frame, axis, focus, &casters, method, fallback, ws);
+        ws.put_body(casters);
+        result
     }
 
     /// [`Self::place`] with the caster body of `focus` already computed.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn place_with_casters(
         &self,
         frame: LightFrame,
@@ -322,13 +427,19 @@ impl ShadowProblem {
         casters: &ConvexPolyhedron,
         method: Method,
         fallback: Option<Fallback>,
+        ws: &mut SolveWorkspace,
     ) -> Result<LightMatrix> {
-        let points = self.mappable_vertices(focus);
+        let mut points = ws.take_points();
+        self.mappable_vertices_into(focus, &mut points, ws);
         // Depth covers the casters and all of `focus`, a vertex at the light
         // included (then near is clamped and unclipped depth requested).
-        let mut depth_points = casters.vertices().to_vec();
+        let mut depth_points = ws.take_points();
+        depth_points.extend_from_slice(casters.vertices());
         depth_points.extend_from_slice(focus.vertices());
-        self.placement(frame, axis, &points, &depth_points, method, fallback).build(&mut FitWorkspace::default())
+        let result = self.placement(frame, axis, &points, &depth_points, method, fallback).build_in(ws);
+        ws.put_points(depth_points);
+        ws.put_points(points);
+        result
     }
 
     /// The one constructor of a [`Placement`] for this problem: its light,
@@ -357,4 +468,15 @@ impl ShadowProblem {
             fallback,
         }
     }
+}
+
+/// The view frustum's six half-spaces into `out` (cleared first).
+fn view_planes_into(camera: &Camera, out: &mut Vec<Plane>) {
+    let m = camera.clip_from_world();
+    let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+    // Inside: h·[x; 1] >= 0 for each of these (a Plane keeps the other sign).
+    out.clear();
+    out.extend(
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].into_iter().filter_map(|h| Plane::from_homogeneous(-h)),
+    );
 }

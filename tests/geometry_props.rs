@@ -109,7 +109,6 @@ fn brute_force_vertices(planes: &[Plane], tol: f64) -> Vec<DVec3> {
 fn surface_area(body: &ConvexPolyhedron) -> f64 {
     let v = body.vertices();
     body.faces()
-        .iter()
         .map(|f| {
             let i = f.indices();
             (2..i.len()).map(|k| 0.5 * (v[i[k - 1]] - v[i[0]]).cross(v[i[k]] - v[i[0]]).length()).sum::<f64>()
@@ -222,7 +221,7 @@ fn hull_with_point_matches_clipped_box() {
             // Close to a vertex or a face: near-degenerate silhouettes.
             2 => body.vertices()[rng.random_range(0..body.vertices().len())] + unit_vector(&mut rng) * 1e-7 * s,
             _ => {
-                let face = &body.faces()[rng.random_range(0..body.faces().len())];
+                let face = body.face(rng.random_range(0..body.face_count())).expect("a face");
                 let x = body.vertices()[face.indices()[0]].lerp(body.vertices()[face.indices()[1]], rng.random());
                 x + face.plane().normal * rng.random_range(-2.0..2.0) * eps
             }
@@ -465,7 +464,7 @@ fn nearly_parallel_cuts_stay_closed() {
         let context = format!("case {case} (scale {s:e})");
         // A cascade of planes within a few eps and tiny angles of one face,
         // as PSM's hull planes are when the light is near a face's plane.
-        let face = body.faces()[rng.random_range(0..body.faces().len())].plane();
+        let face = body.face(rng.random_range(0..body.face_count())).expect("a face").plane();
         let pivot = body.centroid();
         for _ in 0..rng.random_range(1..8) {
             let angle = log_uniform(&mut rng, 1e-12, 1e-5);
@@ -524,7 +523,7 @@ fn extrusion_clipped_by_box_is_the_sweep() {
         let dir = match case % 5 {
             // Parallel to a face.
             0 => {
-                let n = body.faces()[rng.random_range(0..body.faces().len())].plane().normal;
+                let n = body.face(rng.random_range(0..body.face_count())).expect("a face").plane().normal;
                 n.any_orthonormal_vector()
             }
             1 => [DVec3::X, DVec3::NEG_Y, DVec3::Z][rng.random_range(0..3)],

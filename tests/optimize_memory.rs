@@ -1,12 +1,13 @@
 //! Memory use across repeated calls of the optimizer, the all-lights sample
 //! extraction and the classical methods (its own test binary with one test:
 //! the allocation counters are global, so no other test may run beside it).
+//! The classical methods must not allocate at all once warm (issue 15).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 
 use glam::DVec3;
-use lixel::optimize::{OptimizeOptions, Optimizer, SampleOptions};
+use lixel::optimize::{OptimizeOptions, Optimizer, SampleOptions, SampleWorkspace};
 use lixel::{Light, Parameterization, Samples};
 
 mod common;
@@ -35,7 +36,19 @@ static ALLOCATOR: Counting = Counting;
 /// Runs `call` 50 times to warm up, then 200 times; fails if the live heap
 /// grew. Returns the allocations per call after warm-up (reported with
 /// `--nocapture`).
-fn steady_state(name: &str, mut call: impl FnMut()) -> f64 {
+fn steady_state(name: &str, call: impl FnMut()) -> f64 {
+    steady_state_with_slack(name, 0, call)
+}
+
+/// Live-heap slack for calls that go through rayon: its job queue (a
+/// crossbeam injector) keeps a block alive now and then, and a worker that
+/// gets a light for the first time grows its own thread's solve workspace
+/// (a few KiB each); the strict check failed intermittently under
+/// `--all-features`. A leak of more than 320 bytes per call still fails.
+const RAYON_SLACK: isize = if cfg!(feature = "rayon") { 65536 } else { 0 };
+
+/// [`steady_state`], allowing the live heap to end up `slack` bytes higher.
+fn steady_state_with_slack(name: &str, slack: isize, mut call: impl FnMut()) -> f64 {
     for _ in 0..50 {
         call();
     }
@@ -45,7 +58,7 @@ fn steady_state(name: &str, mut call: impl FnMut()) -> f64 {
         call();
     }
     let after = LIVE.load(Ordering::Relaxed);
-    assert!(after <= baseline, "{name}: live heap grew from {baseline} to {after} bytes over 200 calls");
+    assert!(after <= baseline + slack, "{name}: live heap grew from {baseline} to {after} bytes over 200 calls");
     let per_call = (ALLOCATIONS.load(Ordering::Relaxed) - allocations) as f64 / 200.0;
     eprintln!("{name}: {per_call} allocations per call after warm-up");
     per_call
@@ -61,15 +74,47 @@ fn repeated_calls_do_not_grow_memory() {
     ];
     let (problems, readback) = common::setup(&lights);
     let readback = readback.as_readback(false);
-    steady_state("all-lights extraction", || {
+    steady_state_with_slack("all-lights extraction (fresh samples)", RAYON_SLACK, || {
         std::hint::black_box(Samples::from_readback_all(&problems, &readback, &SampleOptions::default()).unwrap());
     });
-    for parameterization in Parameterization::ALL_DEFAULT {
-        for problem in &problems {
-            steady_state(parameterization.method().name(), || {
-                std::hint::black_box(problem.solve(&parameterization).ok());
-            });
+    // Into reused samples and workspace: nothing, but for rayon's own
+    // scheduling when the `rayon` feature computes the bodies in parallel.
+    let (mut out, mut workspace) = (Vec::new(), SampleWorkspace::new());
+    let per_call = steady_state_with_slack("all-lights extraction into reused samples", RAYON_SLACK, || {
+        Samples::from_readback_all_into(&problems, &readback, &SampleOptions::default(), &mut out, &mut workspace)
+            .unwrap();
+        std::hint::black_box(&out);
+    });
+    // Rayon's job queue allocates a block now and then (measured: 3 in 200
+    // calls); a per-call allocation of the extraction would be >= 1.
+    let allowed = if cfg!(feature = "rayon") { 0.1 } else { 0.0 };
+    assert!(per_call <= allowed, "all-lights extraction into reused buffers allocates {per_call} per call");
+    let mut one = Samples::from_readback(&problems[1], &readback, 1, &SampleOptions::default()).unwrap();
+    let per_call = steady_state("one-light extraction into reused samples", || {
+        for (bit, problem) in problems.iter().enumerate() {
+            one.from_readback_into(problem, &readback, bit as u32, &SampleOptions::default(), &mut workspace).unwrap();
+            std::hint::black_box(&one);
         }
+    });
+    assert_eq!(per_call, 0.0, "one-light extraction into reused buffers allocates after warm-up");
+    // Every classical method, after warm-up: no allocation at all, neither
+    // for a frame's lights on one camera (the camera cache hits) nor with the
+    // camera changing on every call (it misses and rebuilds in place).
+    let (other_camera, _) = common::setup_with_eye(&lights, DVec3::new(3.0, 2.5, 6.0));
+    for parameterization in Parameterization::ALL_DEFAULT {
+        let name = parameterization.method().name();
+        let per_call = steady_state(&format!("{name}, 3 lights, one camera"), || {
+            for problem in &problems {
+                std::hint::black_box(problem.solve(&parameterization).ok());
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates after warm-up");
+        let per_call = steady_state(&format!("{name}, camera changing every call"), || {
+            for problem in problems.iter().zip(&other_camera).flat_map(|(a, b)| [a, b]) {
+                std::hint::black_box(problem.solve(&parameterization).ok());
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates after warm-up when the camera changes");
     }
 }
 
@@ -90,9 +135,10 @@ fn repeated_optimization_does_not_grow_memory() {
     }
     let after = LIVE.load(Ordering::Relaxed);
     assert!(after <= baseline, "live heap grew from {baseline} to {after} bytes over 200 calls");
-    // Measured, not asserted: the optimizer still allocates a few small
-    // buffers per call (issue 15 item 4 is open; see notes/issue-15.md).
-    steady_state("optimizer", || {
+    // One allocation per call remains, and it is the answer's: the report's
+    // list of the angles tried (reserved once at its final size).
+    let per_call = steady_state("optimizer", || {
         prev = Some(optimizer.optimize(&samples, prev.as_ref()).unwrap().matrix);
     });
+    assert!(per_call <= 1.0, "the optimizer allocates {per_call} times per call after warm-up");
 }

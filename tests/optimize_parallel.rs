@@ -2,7 +2,7 @@
 //! per-light, sequential answers (issue 15).
 
 use glam::DVec3;
-use lixel::optimize::{optimize_lights, OptimizeOptions, Optimizer, SampleOptions};
+use lixel::optimize::{optimize_lights, OptimizeOptions, Optimizer, SampleOptions, SampleWorkspace};
 use lixel::{Light, LightMatrix, LixelError, Samples};
 
 mod common;
@@ -43,6 +43,41 @@ fn all_lights_extraction_equals_one_light_at_a_time() {
         // The comparison is not vacuous.
         assert!(boundaries > 0, "no boundary samples at all");
     }
+}
+
+/// Extraction into reused samples and workspace (grown on other lights,
+/// another camera, more lights, the other normals setting) gives exactly
+/// the fresh extraction.
+#[test]
+fn extraction_into_reused_buffers_equals_fresh() {
+    let lights = lights();
+    let (problems, readback) = common::setup(&lights);
+    let (other_problems, other_readback) = common::setup_with_eye(&lights[..3], DVec3::new(3.0, 2.5, 6.0));
+    let options = SampleOptions::default();
+    let mut workspace = SampleWorkspace::new();
+    let mut out = Vec::new();
+    let mut one = Samples::from_readback(&other_problems[2], &other_readback.as_readback(true), 2, &options).unwrap();
+    for (round, normals) in [(0, false), (1, true), (2, false)] {
+        // Dirty the buffers with the other camera's view first.
+        let other = other_readback.as_readback(!normals);
+        let count = if round == 1 { 2 } else { 3 };
+        Samples::from_readback_all_into(&other_problems[..count], &other, &options, &mut out, &mut workspace).unwrap();
+        let readback = readback.as_readback(normals);
+        Samples::from_readback_all_into(&problems, &readback, &options, &mut out, &mut workspace).unwrap();
+        let fresh = Samples::from_readback_all(&problems, &readback, &options).unwrap();
+        assert_eq!(format!("{out:?}"), format!("{fresh:?}"), "round {round}");
+        for (i, problem) in problems.iter().enumerate() {
+            one.from_readback_into(problem, &readback, i as u32, &options, &mut workspace).unwrap();
+            let alone = Samples::from_readback(problem, &readback, i as u32, &options).unwrap();
+            assert_eq!(format!("{one:?}"), format!("{alone:?}"), "round {round}, light {i}");
+        }
+    }
+    // An error leaves the previous samples as they were.
+    let before = format!("{out:?}");
+    let too_many = vec![problems[0].clone(); 33];
+    let readback = readback.as_readback(false);
+    assert!(Samples::from_readback_all_into(&too_many, &readback, &options, &mut out, &mut workspace).is_err());
+    assert_eq!(format!("{out:?}"), before);
 }
 
 #[test]

@@ -87,17 +87,23 @@ fn discard_interior(points: &mut Vec<DVec2>) {
             }
         }
     }
-    let mut corners: Vec<DVec2> = Vec::with_capacity(8);
+    // At most eight corners: kept in an array, so the pass allocates nothing.
+    let mut corners = [DVec2::ZERO; 8];
+    let mut n = 0;
     for p in octagon {
-        if corners.last() != Some(&p) && corners.first() != Some(&p) {
-            corners.push(p);
+        if n == 0 || (corners[n - 1] != p && corners[0] != p) {
+            corners[n] = p;
+            n += 1;
         }
     }
-    if corners.len() < 3 {
+    if n < 3 {
         return;
     }
-    let edges: Vec<(DVec2, DVec2)> =
-        (0..corners.len()).map(|i| (corners[i], corners[(i + 1) % corners.len()])).collect();
+    let mut edges = [(DVec2::ZERO, DVec2::ZERO); 8];
+    for (i, edge) in edges[..n].iter_mut().enumerate() {
+        *edge = (corners[i], corners[(i + 1) % n]);
+    }
+    let edges = &edges[..n];
     let strictly_inside = |p: &DVec2| {
         edges.iter().all(|&(a, b)| {
             let (ab, ap) = (b - a, *p - a);

@@ -57,8 +57,16 @@ impl Cone {
 /// full precision for narrow cones.
 #[must_use]
 pub fn min_enclosing_cone(dirs: &[DVec3]) -> Option<Cone> {
-    let mut units: Vec<DVec3> = dirs.iter().filter_map(|&d| unit(d)).collect();
-    shuffle(&mut units);
+    min_enclosing_cone_in(dirs, &mut Vec::new())
+}
+
+/// [`min_enclosing_cone`] with `units` as scratch for the normalized
+/// directions (no allocation once it is large enough).
+pub(crate) fn min_enclosing_cone_in(dirs: &[DVec3], units: &mut Vec<DVec3>) -> Option<Cone> {
+    units.clear();
+    units.extend(dirs.iter().filter_map(|&d| unit(d)));
+    shuffle(units);
+    let units = units.as_slice();
     let (&first, _) = units.split_first()?;
 
     let mut cap = Cap::point(first);

@@ -21,11 +21,14 @@
 //! choice exists: near-degenerate input grows a body by at most about `eps`
 //! rather than dropping part of it.
 
+mod clip;
 mod cone;
 mod plane;
 mod polyhedron;
 mod validation;
 
+pub use clip::ClipWorkspace;
+pub(crate) use cone::min_enclosing_cone_in;
 pub use cone::{min_enclosing_cone, Cone};
 pub use plane::Plane;
 pub use polyhedron::{ConvexPolyhedron, Face};

@@ -1,11 +1,14 @@
 //! Convex polyhedra with index-shared faces, built from boxes and frusta and
 //! cut by half-spaces.
-
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+//!
+//! A body keeps its face loops in one flat index array (each face a span of
+//! it), so that a body can be rebuilt in place and a solver that reuses its
+//! bodies and a [`ClipWorkspace`] allocates nothing once their buffers have
+//! grown (issue 15).
 
 use glam::DVec3;
 
+use super::clip::{half_edge_faces, loop_edges, ClipWorkspace, IndexMap, LoopWalker};
 use super::{accurate_cross, default_eps, Plane};
 
 /// The faces of a box or frustum as loops of corner indices.
@@ -25,14 +28,14 @@ const BOX_FACES: [[usize; 4]; 6] = [
 ];
 
 /// One face of a [`ConvexPolyhedron`]: an outward plane and a loop of vertex
-/// indices.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Face {
+/// indices (a view into the body).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Face<'a> {
     plane: Plane,
-    indices: Vec<usize>,
+    indices: &'a [usize],
 }
 
-impl Face {
+impl<'a> Face<'a> {
     /// The face's plane, its normal pointing out of the polyhedron.
     ///
     /// This is the exact plane the face came from (a box side, a frustum side,
@@ -48,15 +51,23 @@ impl Face {
     /// at least three, all distinct. Two adjacent faces share the indices of
     /// their common edge and traverse it in opposite directions.
     #[must_use]
-    pub fn indices(&self) -> &[usize] {
-        &self.indices
+    pub fn indices(&self) -> &'a [usize] {
+        self.indices
     }
 
     /// The directed edges `(from, to)` of the loop, in order.
-    pub fn edges(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
-        let next = self.indices.iter().cycle().skip(1);
-        self.indices.iter().copied().zip(next.copied())
+    pub fn edges(&self) -> impl Iterator<Item = (usize, usize)> + 'a {
+        loop_edges(self.indices)
     }
+}
+
+/// A face as stored: its plane and its span `start..end` of the body's
+/// index array.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct FaceSpan {
+    pub(super) plane: Plane,
+    pub(super) start: usize,
+    pub(super) end: usize,
 }
 
 /// A bounded convex polyhedron: indexed vertices and faces with outward
@@ -79,33 +90,9 @@ impl Face {
 /// yields an empty body, `None` or an empty plane list as documented.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ConvexPolyhedron {
-    vertices: Vec<DVec3>,
-    faces: Vec<Face>,
-}
-
-/// Where a vertex lies relative to a clipping plane, with tolerance.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Side {
-    Inside,
-    On,
-    Outside,
-}
-
-impl Side {
-    fn of(distance: f64, eps: f64) -> Side {
-        if distance > eps {
-            Side::Outside
-        } else if distance < -eps {
-            Side::Inside
-        } else {
-            Side::On
-        }
-    }
-
-    /// Whether an edge between the two sides crosses the plane strictly.
-    fn is_opposite(self, other: Side) -> bool {
-        matches!((self, other), (Side::Inside, Side::Outside) | (Side::Outside, Side::Inside))
-    }
+    pub(super) vertices: Vec<DVec3>,
+    pub(super) faces: Vec<FaceSpan>,
+    pub(super) indices: Vec<usize>,
 }
 
 impl ConvexPolyhedron {
@@ -121,21 +108,52 @@ impl ConvexPolyhedron {
         self.faces.is_empty()
     }
 
+    /// Makes the body empty, keeping its buffers for reuse.
+    pub fn clear(&mut self) {
+        self.vertices.clear();
+        self.faces.clear();
+        self.indices.clear();
+    }
+
+    /// Makes this body a copy of `other`, reusing its buffers (unlike
+    /// `*self = other.clone()`, this does not allocate once they are large
+    /// enough).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.vertices.clone_from(&other.vertices);
+        self.faces.clone_from(&other.faces);
+        self.indices.clone_from(&other.indices);
+    }
+
     /// The vertices, indexed by [`Face::indices`].
     #[must_use]
     pub fn vertices(&self) -> &[DVec3] {
         &self.vertices
     }
 
-    /// The faces.
+    /// The faces, in order.
+    pub fn faces(&self) -> impl ExactSizeIterator<Item = Face<'_>> + Clone + '_ {
+        self.faces.iter().map(|span| self.view(span))
+    }
+
+    /// The number of faces.
     #[must_use]
-    pub fn faces(&self) -> &[Face] {
-        &self.faces
+    pub fn face_count(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Face `k` (in the order of [`faces`](Self::faces)); `None` past the last.
+    #[must_use]
+    pub fn face(&self, k: usize) -> Option<Face<'_>> {
+        self.faces.get(k).map(|span| self.view(span))
+    }
+
+    fn view(&self, span: &FaceSpan) -> Face<'_> {
+        Face { plane: span.plane, indices: &self.indices[span.start..span.end] }
     }
 
     /// The face planes: the polyhedron is the intersection of their insides.
     pub fn planes(&self) -> impl ExactSizeIterator<Item = Plane> + '_ {
-        self.faces.iter().map(Face::plane)
+        self.faces.iter().map(|span| span.plane)
     }
 
     /// The mean of the vertices (an interior point of a non-degenerate
@@ -192,11 +210,10 @@ impl ConvexPolyhedron {
     pub fn volume(&self) -> f64 {
         let c = self.centroid();
         let mut three_volume = 0.0;
-        for face in &self.faces {
-            let corners: Vec<DVec3> = face.indices.iter().map(|&i| self.vertices[i]).collect();
-            let center = corners.iter().sum::<DVec3>() / corners.len() as f64;
-            let twice_area: DVec3 =
-                corners.iter().zip(corners.iter().cycle().skip(1)).map(|(&a, &b)| (a - center).cross(b - center)).sum();
+        for face in self.faces() {
+            let corner = |i: usize| self.vertices[i];
+            let center = face.indices.iter().map(|&i| corner(i)).sum::<DVec3>() / face.indices.len() as f64;
+            let twice_area: DVec3 = face.edges().map(|(a, b)| (corner(a) - center).cross(corner(b) - center)).sum();
             let height = -face.plane.signed_distance(c);
             three_volume += 0.5 * twice_area.dot(face.plane.normal) * height;
         }
@@ -214,25 +231,32 @@ impl ConvexPolyhedron {
     /// axis or any coordinate is not finite.
     #[must_use]
     pub fn from_aabb(min: DVec3, max: DVec3) -> Self {
+        let mut body = Self::empty();
+        body.set_aabb(min, max);
+        body
+    }
+
+    /// Makes this body the box [`from_aabb`](Self::from_aabb) builds,
+    /// reusing its buffers.
+    pub fn set_aabb(&mut self, min: DVec3, max: DVec3) {
+        self.clear();
         let Some((min, max)) = padded_box(min, max) else {
-            return Self::empty();
+            return;
         };
         let pick = |bit: bool, lo: f64, hi: f64| if bit { hi } else { lo };
-        let vertices = (0..8)
-            .map(|i| {
-                DVec3::new(
-                    pick(i & 1 != 0, min.x, max.x),
-                    pick(i & 2 != 0, min.y, max.y),
-                    pick(i & 4 != 0, min.z, max.z),
-                )
-            })
-            .collect();
-        let faces = BOX_FACES
-            .iter()
-            .zip(box_planes(min, max))
-            .map(|(indices, plane)| Face { plane, indices: indices.to_vec() })
-            .collect();
-        Self { vertices, faces }
+        self.vertices.extend((0..8).map(|i| {
+            DVec3::new(pick(i & 1 != 0, min.x, max.x), pick(i & 2 != 0, min.y, max.y), pick(i & 4 != 0, min.z, max.z))
+        }));
+        for (indices, plane) in BOX_FACES.iter().zip(box_planes(min, max)) {
+            self.push_face(plane, indices);
+        }
+    }
+
+    /// Appends a face with the given loop.
+    fn push_face(&mut self, plane: Plane, indices: &[usize]) {
+        let start = self.indices.len();
+        self.indices.extend_from_slice(indices);
+        self.faces.push(FaceSpan { plane, start, end: self.indices.len() });
     }
 
     /// The frustum (any hexahedron with planar, convex faces) with the given
@@ -256,42 +280,62 @@ impl ConvexPolyhedron {
     /// otherwise.
     #[must_use]
     pub fn from_frustum_corners(corners: &[DVec3; 8]) -> Option<Self> {
+        let mut body = Self::empty();
+        body.set_frustum_corners(corners).then_some(body)
+    }
+
+    /// Makes this body the frustum [`from_frustum_corners`](Self::from_frustum_corners)
+    /// builds, reusing its buffers; returns `false` (and leaves the body
+    /// empty) where that returns `None`.
+    pub fn set_frustum_corners(&mut self, corners: &[DVec3; 8]) -> bool {
+        self.clear();
         if !corners.iter().all(|c| c.is_finite()) {
-            return None;
+            return false;
         }
         let (min, max) = corners[1..].iter().fold((corners[0], corners[0]), |(lo, hi), &c| (lo.min(c), hi.max(c)));
         let magnitude = min.abs().max(max.abs()).max_element();
         let eps = default_eps(norm(max - min).max(1e-3 * magnitude));
         let centroid = corners.iter().sum::<DVec3>() / 8.0;
 
-        let mut faces = Vec::with_capacity(6);
         let mut inward = 0;
         for indices in &BOX_FACES {
             let quad = indices.map(|i| corners[i]);
             let center = quad.iter().sum::<DVec3>() / 4.0;
             let newell: DVec3 = (0..4).map(|k| (quad[k] - center).cross(quad[(k + 1) % 4] - center)).sum();
-            let normal = newell.try_normalize()?;
+            let Some(normal) = newell.try_normalize() else {
+                self.clear();
+                return false;
+            };
             let plane = Plane { normal, offset: -normal.dot(center) };
             let d = plane.signed_distance(centroid);
             if d > eps {
                 inward += 1;
             } else if d >= -eps {
-                return None;
+                self.clear();
+                return false;
             }
-            faces.push(Face { plane, indices: indices.to_vec() });
+            self.push_face(plane, indices);
         }
         match inward {
             0 => {}
             6 => {
-                for face in &mut faces {
-                    face.plane = face.plane.flipped();
-                    face.indices.reverse();
+                for span in &mut self.faces {
+                    span.plane = span.plane.flipped();
+                    self.indices[span.start..span.end].reverse();
                 }
             }
-            _ => return None,
+            _ => {
+                self.clear();
+                return false;
+            }
         }
-        let convex = faces.iter().all(|f| corners.iter().all(|&c| f.plane.signed_distance(c) <= eps));
-        convex.then(|| Self { vertices: corners.to_vec(), faces })
+        let convex = self.faces.iter().all(|f| corners.iter().all(|&c| f.plane.signed_distance(c) <= eps));
+        if convex {
+            self.vertices.extend_from_slice(corners);
+        } else {
+            self.clear();
+        }
+        convex
     }
 
     /// The part of the polyhedron inside `plane` (signed distance `<= 0`).
@@ -301,6 +345,9 @@ impl ConvexPolyhedron {
     /// returned unchanged; if none lies more than `eps` inside, the result is
     /// empty (what would remain is at most `eps` thick). A non-finite plane
     /// gives an empty result; a negative or NaN `eps` counts as zero.
+    ///
+    /// This allocates the result and scratch buffers; [`clip_into`](Self::clip_into)
+    /// reuses them.
     ///
     /// # Algorithm
     ///
@@ -321,71 +368,59 @@ impl ConvexPolyhedron {
     /// so every edge still has exactly two faces.)
     #[must_use]
     pub fn clip(&self, plane: &Plane, eps: f64) -> Self {
-        if self.is_empty() || !plane.is_finite() {
-            return Self::empty();
-        }
-        let eps = eps.max(0.0);
-        let dist: Vec<f64> = self.vertices.iter().map(|&v| plane.signed_distance(v)).collect();
-        let side: Vec<Side> = dist.iter().map(|&d| Side::of(d, eps)).collect();
-        if !side.contains(&Side::Outside) {
-            return self.clone();
-        }
-        if !side.contains(&Side::Inside) {
-            return Self::empty();
-        }
+        let mut out = Self::empty();
+        self.clip_into(plane, eps, &mut out, &mut ClipWorkspace::default());
+        out
+    }
 
-        // Kept vertices first, under their new indices; cut points follow.
-        let mut vertices = Vec::with_capacity(self.vertices.len() + 8);
-        let mut new_index = vec![usize::MAX; self.vertices.len()];
-        for (i, &v) in self.vertices.iter().enumerate() {
-            if side[i] != Side::Outside {
-                new_index[i] = vertices.len();
-                vertices.push(v);
-            }
+    /// [`clip`](Self::clip) into `out` (its previous content is replaced),
+    /// with scratch buffers from `workspace`: no allocation once `out` and
+    /// the workspace have grown to the body's size.
+    pub fn clip_into(&self, plane: &Plane, eps: f64, out: &mut Self, workspace: &mut ClipWorkspace) {
+        if !self.clip_core(plane, eps, out, workspace) {
+            out.copy_from(self);
         }
-        let mut cuts: IndexMap<(usize, usize), usize> = IndexMap::default();
-        let mut faces = Vec::with_capacity(self.faces.len() + 1);
-        for face in &self.faces {
-            let mut indices = Vec::with_capacity(face.indices.len() + 1);
-            for (a, b) in face.edges() {
-                if side[a] != Side::Outside {
-                    indices.push(new_index[a]);
-                }
-                if side[a].is_opposite(side[b]) {
-                    let key = (a.min(b), a.max(b));
-                    let cut = *cuts.entry(key).or_insert_with(|| {
-                        let (i, j) = key;
-                        let t = dist[i] / (dist[i] - dist[j]);
-                        vertices.push(self.vertices[i].lerp(self.vertices[j], t));
-                        vertices.len() - 1
-                    });
-                    indices.push(cut);
-                }
-            }
-            // A face with nothing strictly inside lies in the cap (to within
-            // eps): the cap replaces it.
-            let keeps_inside = face.indices.iter().any(|&i| side[i] == Side::Inside);
-            if keeps_inside && indices.len() >= 3 {
-                faces.push(Face { plane: face.plane, indices });
-            }
-        }
-
-        let caps = hole_loops(&faces, &half_edge_faces(&faces));
-        faces.extend(caps.into_iter().map(|indices| Face { plane: *plane, indices }));
-        Self::from_parts(vertices, faces)
     }
 
     /// The polyhedron clipped by every plane in turn (see [`clip`](Self::clip)).
     #[must_use]
     pub fn clip_all<'a>(&self, planes: impl IntoIterator<Item = &'a Plane>, eps: f64) -> Self {
         let mut body = self.clone();
+        body.clip_all_in_place(planes, eps, &mut ClipWorkspace::default());
+        body
+    }
+
+    /// [`clip_all`](Self::clip_all) into `out` (its previous content is
+    /// replaced), reusing `workspace`.
+    pub fn clip_all_into<'a>(
+        &self,
+        planes: impl IntoIterator<Item = &'a Plane>,
+        eps: f64,
+        out: &mut Self,
+        workspace: &mut ClipWorkspace,
+    ) {
+        out.copy_from(self);
+        out.clip_all_in_place(planes, eps, workspace);
+    }
+
+    /// Replaces the body by [`clip_all`](Self::clip_all) of it, reusing its
+    /// buffers and `workspace`.
+    pub fn clip_all_in_place<'a>(
+        &mut self,
+        planes: impl IntoIterator<Item = &'a Plane>,
+        eps: f64,
+        workspace: &mut ClipWorkspace,
+    ) {
         for plane in planes {
-            if body.is_empty() {
+            if self.is_empty() {
                 break;
             }
-            body = body.clip(plane, eps);
+            let mut next = std::mem::take(&mut workspace.spare);
+            if self.clip_core(plane, eps, &mut next, workspace) {
+                std::mem::swap(self, &mut next);
+            }
+            workspace.spare = next;
         }
-        body
     }
 
     /// The intersection with the box `[min, max]`, padded like
@@ -415,19 +450,35 @@ impl ConvexPolyhedron {
     /// caller must not read the empty list as "everywhere".
     #[must_use]
     pub fn hull_with_point_planes(&self, p: DVec3, eps: f64) -> Vec<Plane> {
+        let mut planes = Vec::new();
+        self.hull_with_point_planes_into(p, eps, &mut planes, &mut ClipWorkspace::default());
+        planes
+    }
+
+    /// [`hull_with_point_planes`](Self::hull_with_point_planes) into `planes`
+    /// (cleared first), reusing `workspace`.
+    pub fn hull_with_point_planes_into(
+        &self,
+        p: DVec3,
+        eps: f64,
+        planes: &mut Vec<Plane>,
+        workspace: &mut ClipWorkspace,
+    ) {
+        planes.clear();
         if self.is_empty() || !p.is_finite() {
-            return Vec::new();
+            return;
         }
-        let sees_p: Vec<bool> = self.planes().map(|plane| plane.signed_distance(p) > eps).collect();
-        let mut planes: Vec<Plane> =
-            self.planes().zip(&sees_p).filter(|&(_, &sees)| !sees).map(|(plane, _)| plane).collect();
-        for (a, b, seeing, across) in self.silhouette(&sees_p) {
+        let ClipWorkspace { flags: sees_p, edges, silhouette, .. } = workspace;
+        sees_p.clear();
+        sees_p.extend(self.planes().map(|plane| plane.signed_distance(p) > eps));
+        planes.extend(self.planes().zip(sees_p.iter()).filter(|&(_, &sees)| !sees).map(|(plane, _)| plane));
+        self.silhouette(sees_p, edges, silhouette);
+        for &(a, b, seeing, across) in silhouette.iter() {
             let plane = self.cone_face_plane(a, b, p, self.faces[seeing].plane, self.faces[across].plane, eps);
             if !planes.contains(&plane) {
                 planes.push(plane);
             }
         }
-        planes
     }
 
     /// The convex hull `conv(self ∪ {p})`.
@@ -458,30 +509,40 @@ impl ConvexPolyhedron {
         if self.is_empty() || !p.is_finite() {
             return Self::empty();
         }
-        let kept: Vec<Face> = self.faces.iter().filter(|face| face.plane.signed_distance(p) <= eps).cloned().collect();
+        let kept: Vec<FaceSpan> =
+            self.faces.iter().filter(|face| face.plane.signed_distance(p) <= eps).copied().collect();
         if kept.len() == self.faces.len() {
             return self.clone();
         }
-        let kept_edges = half_edge_faces(&kept);
-        let mut loops = hole_loops(&kept, &kept_edges);
+        let mut kept_edges = IndexMap::default();
+        half_edge_faces(&mut kept_edges, &kept, &self.indices);
+        let mut walker = LoopWalker::default();
+        walker.collect_boundary(&kept, &self.indices, &kept_edges);
+        let mut loops: Vec<Vec<usize>> = Vec::new();
+        walker.walk(self.vertices.len(), |cycle| loops.push(cycle.to_vec()));
         let (Some(silhouette), None) = (loops.pop(), loops.pop()) else {
             return self.hull_by_clipping(p, eps);
         };
 
-        let all_edges = half_edge_faces(&self.faces);
+        let mut all_edges = IndexMap::default();
+        half_edge_faces(&mut all_edges, &self.faces, &self.indices);
         let apex = self.vertices.len();
-        let mut vertices = self.vertices.clone();
-        vertices.push(p);
-        let mut faces = kept.clone();
+        let mut hull = Self::empty();
+        hull.vertices.extend_from_slice(&self.vertices);
+        hull.vertices.push(p);
+        for span in &kept {
+            hull.push_face(span.plane, &self.indices[span.start..span.end]);
+        }
         for (k, &a) in silhouette.iter().enumerate() {
             let b = silhouette[(k + 1) % silhouette.len()];
             let (Some(&across), Some(&seeing)) = (kept_edges.get(&(b, a)), all_edges.get(&(a, b))) else {
                 return self.hull_by_clipping(p, eps);
             };
             let plane = self.cone_face_plane(a, b, p, self.faces[seeing].plane, kept[across].plane, eps);
-            faces.push(Face { plane, indices: vec![a, b, apex] });
+            hull.push_face(plane, &[a, b, apex]);
         }
-        Self::from_parts(vertices, faces)
+        hull.finish_parts(&mut Vec::new());
+        hull
     }
 
     /// The half-spaces of the unbounded body `{x + t * dir : x ∈ self, t >= 0}`
@@ -510,61 +571,91 @@ impl ConvexPolyhedron {
     /// `dir` has normal `(b - a) × dir`, evaluated with fused multiply-adds.
     #[must_use]
     pub fn extrusion_planes(&self, dir: DVec3, eps: f64) -> Vec<Plane> {
-        if self.is_empty() {
-            return Vec::new();
-        }
-        // Scaling by the largest component first avoids overflow for huge `dir`.
-        let Some(dir) = (dir / dir.abs().max_element()).try_normalize() else {
-            return if dir == DVec3::ZERO { self.planes().collect() } else { Vec::new() };
-        };
-        let swept: Vec<bool> = self.planes().map(|plane| plane.normal.dot(dir) > 0.0).collect();
-        let mut planes: Vec<Plane> = self.planes().zip(&swept).filter(|&(_, &s)| !s).map(|(plane, _)| plane).collect();
-        for (a, b, _, _) in self.silhouette(&swept) {
-            let (va, vb) = (self.vertices[a], self.vertices[b]);
-            planes.extend(self.supporting_plane(accurate_cross(vb - va, dir), va, eps).map(|(plane, _)| plane));
-        }
+        let mut planes = Vec::new();
+        self.extrusion_planes_into(dir, eps, &mut planes, &mut ClipWorkspace::default());
         planes
     }
 
-    /// Assembles a polyhedron from faces over a vertex list, dropping unused
-    /// vertices; empty when fewer than four faces remain (no volume) or a
-    /// vertex overflowed.
-    fn from_parts(vertices: Vec<DVec3>, mut faces: Vec<Face>) -> Self {
-        if faces.len() < 4 || !vertices.iter().all(|v| v.is_finite()) {
-            return Self::empty();
+    /// [`extrusion_planes`](Self::extrusion_planes) into `planes` (cleared
+    /// first), reusing `workspace`.
+    pub fn extrusion_planes_into(&self, dir: DVec3, eps: f64, planes: &mut Vec<Plane>, workspace: &mut ClipWorkspace) {
+        planes.clear();
+        if self.is_empty() {
+            return;
         }
-        let mut new_index = vec![usize::MAX; vertices.len()];
-        for &i in faces.iter().flat_map(|f| &f.indices) {
-            new_index[i] = 0;
+        // Scaling by the largest component first avoids overflow for huge `dir`.
+        let Some(dir) = (dir / dir.abs().max_element()).try_normalize() else {
+            if dir == DVec3::ZERO {
+                planes.extend(self.planes());
+            }
+            return;
+        };
+        let ClipWorkspace { flags: swept, edges, silhouette, .. } = workspace;
+        swept.clear();
+        swept.extend(self.planes().map(|plane| plane.normal.dot(dir) > 0.0));
+        planes.extend(self.planes().zip(swept.iter()).filter(|&(_, &s)| !s).map(|(plane, _)| plane));
+        self.silhouette(swept, edges, silhouette);
+        for &(a, b, _, _) in silhouette.iter() {
+            let (va, vb) = (self.vertices[a], self.vertices[b]);
+            planes.extend(self.supporting_plane(accurate_cross(vb - va, dir), va, eps).map(|(plane, _)| plane));
         }
-        let mut used = Vec::with_capacity(vertices.len());
-        for (i, v) in vertices.into_iter().enumerate() {
-            if new_index[i] != usize::MAX {
-                new_index[i] = used.len();
-                used.push(v);
+    }
+
+    /// Drops unused vertices (renumbering the faces); empties the body when
+    /// fewer than four faces remain (no volume) or a vertex overflowed.
+    /// `new_index` is scratch.
+    pub(super) fn finish_parts(&mut self, new_index: &mut Vec<usize>) {
+        if self.faces.len() < 4 || !self.vertices.iter().all(|v| v.is_finite()) {
+            self.clear();
+            return;
+        }
+        new_index.clear();
+        new_index.resize(self.vertices.len(), usize::MAX);
+        let mut marked = 0;
+        for &i in &self.indices {
+            if new_index[i] == usize::MAX {
+                new_index[i] = 0;
+                marked += 1;
             }
         }
-        for i in faces.iter_mut().flat_map(|f| &mut f.indices) {
+        if marked == self.vertices.len() {
+            // Every vertex used: the numbering stays as it is.
+            return;
+        }
+        let mut used = 0;
+        for (i, slot) in new_index.iter_mut().enumerate() {
+            if *slot != usize::MAX {
+                *slot = used;
+                self.vertices[used] = self.vertices[i];
+                used += 1;
+            }
+        }
+        self.vertices.truncate(used);
+        for i in &mut self.indices {
             *i = new_index[*i];
         }
-        Self { vertices: used, faces }
     }
 
     /// The directed edges `(a, b)` of faces marked in `removed` whose
     /// reverse `(b, a)` belongs to a face not marked, as
-    /// `(a, b, removed face, other face)`.
-    fn silhouette(&self, removed: &[bool]) -> Vec<(usize, usize, usize, usize)> {
-        let edge_faces = half_edge_faces(&self.faces);
-        let mut edges = Vec::new();
-        for (f, face) in self.faces.iter().enumerate().filter(|&(f, _)| removed[f]) {
+    /// `(a, b, removed face, other face)`, into `out`; `edge_faces` is
+    /// scratch.
+    fn silhouette(
+        &self,
+        removed: &[bool],
+        edge_faces: &mut IndexMap<(usize, usize), usize>,
+        out: &mut Vec<(usize, usize, usize, usize)>,
+    ) {
+        half_edge_faces(edge_faces, &self.faces, &self.indices);
+        out.clear();
+        for (f, face) in self.faces().enumerate().filter(|&(f, _)| removed[f]) {
             for (a, b) in face.edges() {
                 match edge_faces.get(&(b, a)) {
-                    Some(&across) if !removed[across] => edges.push((a, b, f, across)),
+                    Some(&across) if !removed[across] => out.push((a, b, f, across)),
                     _ => {}
                 }
             }
         }
-        edges
     }
 
     /// The plane of the face `(a, b, p)` of `conv(self ∪ {p})` along the
@@ -657,78 +748,6 @@ fn box_planes(min: DVec3, max: DVec3) -> [Plane; 6] {
         plane(DVec3::NEG_Z, min.z),
         plane(DVec3::Z, -max.z),
     ]
-}
-
-/// A hash map keyed by vertex indices. The keys are small trusted integers
-/// and the maps are only looked up, never iterated (results do not depend on
-/// hashing), so a multiply-rotate hash replaces SipHash, which was ~40% of a
-/// focused solve (callgrind, issue 15).
-type IndexMap<K, V> = HashMap<K, V, BuildHasherDefault<IndexHasher>>;
-
-/// Multiply-rotate hasher for [`IndexMap`].
-#[derive(Clone, Copy, Default)]
-struct IndexHasher(u64);
-
-impl Hasher for IndexHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-    fn write_usize(&mut self, x: usize) {
-        self.write_u64(x as u64);
-    }
-}
-
-/// Maps each directed edge of the faces to the index of its face.
-fn half_edge_faces(faces: &[Face]) -> IndexMap<(usize, usize), usize> {
-    let mut map = IndexMap::with_capacity_and_hasher(faces.iter().map(|f| f.indices.len()).sum(), Default::default());
-    for (i, face) in faces.iter().enumerate() {
-        map.extend(face.edges().map(|edge| (edge, i)));
-    }
-    map
-}
-
-/// The holes in the surface formed by `faces`, each as a simple loop of
-/// vertex indices in the order a face filling it runs (counter-clockwise
-/// from outside); empty when the surface is closed. `edge_faces` is their
-/// [`half_edge_faces`].
-///
-/// # Algorithm
-///
-/// A boundary edge is a directed edge `(a, b)` whose reverse is in no face;
-/// a face filling the hole runs it as `b → a`. These reversed edges form a
-/// balanced directed graph (every vertex has as many in as out), which a
-/// walk splits into simple cycles: follow unused edges, and whenever the walk
-/// returns to a vertex already on its path, cut off the loop it closed.
-/// Normally there is one hole with a simple boundary; a boundary touching
-/// itself at a vertex yields several loops.
-fn hole_loops(faces: &[Face], edge_faces: &IndexMap<(usize, usize), usize>) -> Vec<Vec<usize>> {
-    let mut next: IndexMap<usize, Vec<usize>> = IndexMap::default();
-    let mut starts = Vec::new();
-    for (a, b) in faces.iter().flat_map(Face::edges) {
-        if !edge_faces.contains_key(&(b, a)) {
-            next.entry(b).or_default().push(a);
-            starts.push(b);
-        }
-    }
-    let mut loops = Vec::new();
-    for start in starts {
-        let mut path = vec![start];
-        while let Some(w) = path.last().and_then(|v| next.get_mut(v)).and_then(Vec::pop) {
-            if let Some(i) = path.iter().position(|&u| u == w) {
-                loops.push(path.split_off(i));
-            }
-            path.push(w);
-        }
-    }
-    loops
 }
 
 #[cfg(test)]
@@ -1010,10 +1029,10 @@ mod tests {
 
     #[test]
     fn hole_loops_split_a_pinched_boundary() {
-        let face = |indices: Vec<usize>| Face { plane: Plane { normal: DVec3::Z, offset: 0.0 }, indices };
+        let face = |indices: Vec<usize>| (Plane { normal: DVec3::Z, offset: 0.0 }, indices);
         // Loops as sorted lists of cycles each starting at its least vertex.
-        let loops = |faces: &[Face]| {
-            let mut loops = hole_loops(faces, &half_edge_faces(faces));
+        let loops = |faces: &[(Plane, Vec<usize>)]| {
+            let mut loops = super::super::clip::walk_loops(faces);
             for l in &mut loops {
                 let least = l.iter().enumerate().min_by_key(|&(_, v)| v).map_or(0, |(i, _)| i);
                 l.rotate_left(least);
@@ -1026,7 +1045,64 @@ mod tests {
         // Two triangles touching at vertex 0: a figure-eight boundary.
         assert_eq!(loops(&[face(vec![0, 1, 2]), face(vec![0, 3, 4])]), vec![vec![0, 2, 1], vec![0, 4, 3]]);
         // Closed: no hole.
-        assert!(loops(unit_cube().faces()).is_empty());
+        let cube: Vec<_> = unit_cube().faces().map(|f| (f.plane(), f.indices().to_vec())).collect();
+        assert!(loops(&cube).is_empty());
+    }
+
+    /// The clip's cap boundary from plane edges alone equals the reference
+    /// (every edge's reverse looked up in all faces), bit for bit, over
+    /// random cuts: planes through vertices and along faces (on-plane
+    /// vertices and edges), thick tolerances, slivers.
+    #[test]
+    fn cap_boundary_fast_path_equals_reference() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut fast, mut reference) = (ClipWorkspace::default(), ClipWorkspace::default());
+        reference.reference_boundary = true;
+        let mut cuts = 0;
+        for _ in 0..300 {
+            let mut body = unit_cube();
+            for _ in 0..12 {
+                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+                let Some(n) = n.try_normalize() else { continue };
+                // Through a vertex, through a face's centre, or anywhere.
+                let k = (random() * body.vertices().len() as f64) as usize % body.vertices().len().max(1);
+                let through = match (random() * 3.0) as usize {
+                    0 => body.vertices()[k],
+                    1 => body.centroid(),
+                    _ => body.centroid() + n * (random() - 0.5) * 0.5,
+                };
+                let plane = if random() < 0.3 {
+                    // Through an edge: both its ends on the plane, the edge
+                    // shared by two faces that may both stay.
+                    let face = body.face(k % body.face_count()).expect("a face");
+                    let (a, b) = face.edges().next().expect("an edge");
+                    let (va, vb) = (body.vertices()[a], body.vertices()[b]);
+                    match (vb - va).cross(n).try_normalize() {
+                        Some(normal) => Plane::from_point_normal(va, normal),
+                        None => continue,
+                    }
+                } else {
+                    Plane::from_point_normal(through, n)
+                };
+                let eps = [1e-9, 1e-3, 0.05][(random() * 3.0) as usize % 3];
+                let (mut a, mut b) = (ConvexPolyhedron::empty(), ConvexPolyhedron::empty());
+                body.clip_into(&plane, eps, &mut a, &mut fast);
+                body.clip_into(&plane, eps, &mut b, &mut reference);
+                assert_eq!(a, b);
+                cuts += 1;
+                if a.is_empty() {
+                    break;
+                }
+                body = a;
+            }
+        }
+        assert!(cuts > 1000);
     }
 
     #[test]

@@ -29,7 +29,7 @@ impl ConvexPolyhedron {
         let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
         let mut used = vec![false; vertices.len()];
         let mut area = 0.0;
-        for (f, face) in self.faces().iter().enumerate() {
+        for (f, face) in self.faces().enumerate() {
             let indices = face.indices();
             if indices.len() < 3 {
                 return Err(format!("face {f} has {} vertices", indices.len()));

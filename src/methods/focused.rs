@@ -6,39 +6,60 @@
 //! projection lies inside that intersection, so the map is never larger.
 
 use crate::error::{LixelError, Result};
+use crate::geometry::ConvexPolyhedron;
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
+use crate::workspace::SolveWorkspace;
 
-pub(super) fn solve(problem: &ShadowProblem) -> Result<LightMatrix> {
-    solve_as(problem, Method::Focused, None)
+pub(super) fn solve(problem: &ShadowProblem, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
+    solve_as(problem, Method::Focused, None, ws)
 }
 
 /// The focused map reported as `method` with `fallback` (other methods fall
 /// back to it).
-pub(super) fn solve_as(problem: &ShadowProblem, method: Method, fallback: Option<Fallback>) -> Result<LightMatrix> {
-    let focus = problem.visible_receiver_body();
+pub(super) fn solve_as(
+    problem: &ShadowProblem,
+    method: Method,
+    fallback: Option<Fallback>,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
+    let mut focus = ws.take_body();
+    problem.visible_receiver_body_into(&mut focus, ws);
+    let result = around(problem, &focus, method, fallback, ws);
+    ws.put_body(focus);
+    result
+}
+
+fn around(
+    problem: &ShadowProblem,
+    focus: &ConvexPolyhedron,
+    method: Method,
+    fallback: Option<Fallback>,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible)).map_err(|e| match e {
+        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible), ws).map_err(|e| match e {
             LixelError::LightInsideFocus { .. } => LixelError::NothingVisible { method },
             other => other,
         });
     }
-    let frame = problem.frame_towards(&focus);
-    let axis = super::uniform_axis(problem, &frame, &focus, method)?;
-    problem.place(frame, axis, &focus, method, fallback)
+    let frame = problem.frame_towards(focus);
+    let axis = super::uniform_axis(problem, &frame, focus, method, ws)?;
+    problem.place(frame, axis, focus, method, fallback, ws)
 }
 
 /// The focused matrix from the visible receiver body and its casters,
 /// already computed (the scene optimizer shares them).
 pub(crate) fn from_bodies(
     problem: &ShadowProblem,
-    focus: &crate::geometry::ConvexPolyhedron,
-    casters: &crate::geometry::ConvexPolyhedron,
+    focus: &ConvexPolyhedron,
+    casters: &ConvexPolyhedron,
+    ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return solve(problem);
+        return solve(problem, ws);
     }
     let frame = problem.frame_towards(focus);
-    let axis = super::uniform_axis(problem, &frame, focus, Method::Focused)?;
-    problem.place_with_casters(frame, axis, focus, casters, Method::Focused, None)
+    let axis = super::uniform_axis(problem, &frame, focus, Method::Focused, ws)?;
+    problem.place_with_casters(frame, axis, focus, casters, Method::Focused, None, ws)
 }

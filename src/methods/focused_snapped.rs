@@ -26,11 +26,13 @@
 use glam::{DMat3, DVec2, DVec3};
 
 use crate::error::{LixelError, Result};
+use crate::geometry::ConvexPolyhedron;
 use crate::light::LightFrame;
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
 use crate::scene::ShadowMapSize;
 use crate::tolerance::Tolerances;
+use crate::workspace::SolveWorkspace;
 
 /// Options of [`Parameterization::FocusedSnapped`](super::Parameterization::FocusedSnapped).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,33 +61,64 @@ impl Default for FocusedSnappedOptions {
     }
 }
 
-pub(super) fn solve(problem: &ShadowProblem, options: &FocusedSnappedOptions) -> Result<LightMatrix> {
+pub(super) fn solve(
+    problem: &ShadowProblem,
+    options: &FocusedSnappedOptions,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
+    let mut focus = ws.take_body();
+    problem.visible_receiver_body_into(&mut focus, ws);
+    let result = solve_for(problem, options, &focus, ws);
+    ws.put_body(focus);
+    result
+}
+
+fn solve_for(
+    problem: &ShadowProblem,
+    options: &FocusedSnappedOptions,
+    focus: &ConvexPolyhedron,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
     let method = Method::FocusedSnapped;
-    let focus = problem.visible_receiver_body();
     if focus.is_empty() {
-        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible)).map_err(|e| match e {
+        return super::normal::solve_as(problem, method, Some(Fallback::NothingVisible), ws).map_err(|e| match e {
             LixelError::LightInsideFocus { .. } => LixelError::NothingVisible { method },
             other => other,
         });
     }
     // The normal map's frame and axis: independent of the camera.
-    let receivers = problem.receiver_body();
+    let mut receivers = ws.take_body();
+    problem.receiver_body_into(&mut receivers, ws);
     let frame = problem.frame_towards(&receivers);
-    let axis = super::uniform_axis(problem, &frame, &receivers, method)?.normalize();
+    let axis = super::uniform_axis(problem, &frame, &receivers, method, ws);
+    ws.put_body(receivers);
+    let axis = axis?.normalize();
     let basis = image_basis(&frame, axis);
     // A spot light's apex (a vertex of the body when the light is inside
     // the bounds) has no direction: left to the other vertices.
-    let points = problem.mappable_vertices(&focus);
-    let xs: Vec<DVec3> = points.iter().map(|&p| frame.homogeneous(p)).collect();
+    let mut points = ws.take_points();
+    problem.mappable_vertices_into(focus, &mut points, ws);
+    let mut xs = ws.take_points();
+    xs.extend(points.iter().map(|&p| frame.homogeneous(p)));
     let grid =
         SnapGrid { axis, basis, map: problem.map_size(), steps_per_octave: options.steps_per_octave, margin: 0.0 };
-    let homography =
-        snapped_homography(&frame, problem.tolerances(), &grid, &xs).ok_or(LixelError::NotInFront { method })?;
     // Depth covers the casters and all of the focus, a vertex at the light
     // included (as for the other uniform maps).
-    let mut depth_points = problem.caster_body(&focus).vertices().to_vec();
-    depth_points.extend_from_slice(focus.vertices());
-    problem.placement(frame, axis, &points, &depth_points, method, None).finish_checked(homography, &xs)
+    let mut casters = ws.take_body();
+    let mut depth_points = ws.take_points();
+    let result = snapped_homography(&frame, problem.tolerances(), &grid, &xs)
+        .ok_or(LixelError::NotInFront { method })
+        .and_then(|homography| {
+            problem.caster_body_into(focus, &mut casters, ws);
+            depth_points.extend_from_slice(casters.vertices());
+            depth_points.extend_from_slice(focus.vertices());
+            problem.placement(frame, axis, &points, &depth_points, method, None).finish_checked(homography, &xs)
+        });
+    ws.put_points(depth_points);
+    ws.put_body(casters);
+    ws.put_points(xs);
+    ws.put_points(points);
+    result
 }
 
 /// Image-plane axes perpendicular to the unit `axis`, a function of the

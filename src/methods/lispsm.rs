@@ -30,9 +30,11 @@
 use glam::{DVec2, DVec3};
 
 use crate::error::Result;
+use crate::geometry::ConvexPolyhedron;
 use crate::light::LightFrame;
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
+use crate::workspace::SolveWorkspace;
 
 /// Which formula for the frustum's near distance `n_opt`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,16 +70,28 @@ impl Default for LiSpsmOptions {
     }
 }
 
-pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<LightMatrix> {
-    let focus = problem.visible_receiver_body();
+pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
+    let mut focus = ws.take_body();
+    problem.visible_receiver_body_into(&mut focus, ws);
+    let result = solve_for(problem, options, &focus, ws);
+    ws.put_body(focus);
+    result
+}
+
+fn solve_for(
+    problem: &ShadowProblem,
+    options: &LiSpsmOptions,
+    focus: &ConvexPolyhedron,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::LiSpsm, None);
+        return super::focused::solve_as(problem, Method::LiSpsm, None, ws);
     }
     if problem.camera().is_orthographic() {
-        return super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::OrthographicCamera));
+        return super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::OrthographicCamera), ws);
     }
-    let frame = problem.frame_towards(&focus);
-    let j0 = super::uniform_axis(problem, &frame, &focus, Method::LiSpsm)?;
+    let frame = problem.frame_towards(focus);
+    let j0 = super::uniform_axis(problem, &frame, focus, Method::LiSpsm, ws)?;
     let (e1, e2) = j0.any_orthonormal_pair();
     let camera = problem.camera();
     let view = camera.view_direction();
@@ -87,10 +101,11 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
         Some(l) => (center - l).normalize(),
     };
     let sin_gamma = view.cross(ray).length();
-    let uniform =
-        |sin_gamma| super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::LightAlongView { sin_gamma }));
+    let uniform = |sin_gamma, ws: &mut SolveWorkspace| {
+        super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::LightAlongView { sin_gamma }), ws)
+    };
     if !(sin_gamma >= problem.tolerances().lispsm_min_sin_gamma) {
-        return uniform(sin_gamma);
+        return uniform(sin_gamma, ws);
     }
     let axis_world = (view - ray * view.dot(ray)).normalize();
 
@@ -101,7 +116,7 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
     let q_center = image(xc);
     let dq = (DVec2::new(e1.dot(dx), e2.dot(dx)) - q_center * j0.dot(dx)) / j0.dot(xc);
     let Some(a) = dq.try_normalize() else {
-        return uniform(sin_gamma);
+        return uniform(sin_gamma, ws);
     };
 
     let vertices = focus.vertices();
@@ -111,7 +126,7 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
     let d_image = tau_max - tau_min;
     let d_world = along_max - along_min;
     if !(d_image > 0.0 && d_world > 0.0) {
-        return uniform(sin_gamma);
+        return uniform(sin_gamma, ws);
     }
     let z_n = depth_min.max(camera.z_near());
     let z_f = depth_max.max(z_n * (1.0 + problem.tolerances().min_relative_span));
@@ -130,11 +145,11 @@ pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions) -> Result<
     };
     let n_image = n_world * d_image / d_world;
     if !n_image.is_finite() {
-        return uniform(sin_gamma);
+        return uniform(sin_gamma, ws);
     }
     let tau_c = tau_min - n_image;
     let axis = e1 * a.x + e2 * a.y - j0 * tau_c;
-    problem.place(frame, axis, &focus, Method::LiSpsm, None)
+    problem.place(frame, axis, focus, Method::LiSpsm, None, ws)
 }
 
 /// The light direction of an orthographic frame (its third axis).

@@ -12,10 +12,11 @@ mod psm;
 use glam::DVec3;
 
 use crate::error::{LixelError, Result};
-use crate::geometry::{min_enclosing_cone, ConvexPolyhedron};
+use crate::geometry::{min_enclosing_cone_in, ConvexPolyhedron};
 use crate::light::{Light, LightFrame};
 use crate::matrix::{LightMatrix, Method};
 use crate::problem::ShadowProblem;
+use crate::workspace::{with_workspace, SolveWorkspace};
 
 pub use focused_snapped::FocusedSnappedOptions;
 pub(crate) use focused_snapped::{snapped_homography, SnapGrid};
@@ -77,13 +78,28 @@ impl ShadowProblem {
     /// when a point light (not a spot light: a spot under 89° always fits its
     /// own frustum) sits inside the region its single map must cover.
     pub fn solve(&self, parameterization: &Parameterization) -> Result<LightMatrix> {
+        with_workspace(|ws| self.solve_with(parameterization, ws))
+    }
+
+    /// [`solve`](Self::solve) with the buffers and the camera cache of
+    /// `workspace` (`solve` uses one per thread). The result is the same
+    /// whatever the workspace held before.
+    ///
+    /// # Errors
+    /// As [`solve`](Self::solve).
+    pub fn solve_with(
+        &self,
+        parameterization: &Parameterization,
+        workspace: &mut SolveWorkspace,
+    ) -> Result<LightMatrix> {
+        let ws = workspace;
         match parameterization {
-            Parameterization::Normal => normal::solve(self),
-            Parameterization::Focused => focused::solve(self),
-            Parameterization::FocusedSnapped(options) => focused_snapped::solve(self, options),
-            Parameterization::Psm(options) => psm::solve(self, options),
-            Parameterization::LiSpsm(options) => lispsm::solve(self, options),
-            Parameterization::PlaneOptimal(options) => plane_optimal::solve(self, options),
+            Parameterization::Normal => normal::solve(self, ws),
+            Parameterization::Focused => focused::solve(self, ws),
+            Parameterization::FocusedSnapped(options) => focused_snapped::solve(self, options, ws),
+            Parameterization::Psm(options) => psm::solve(self, options, ws),
+            Parameterization::LiSpsm(options) => lispsm::solve(self, options, ws),
+            Parameterization::PlaneOptimal(options) => plane_optimal::solve(self, options, ws),
         }
     }
 }
@@ -101,6 +117,7 @@ pub(crate) fn uniform_axis(
     frame: &LightFrame,
     body: &ConvexPolyhedron,
     method: Method,
+    ws: &mut SolveWorkspace,
 ) -> Result<DVec3> {
     match frame {
         LightFrame::Orthographic { .. } => Ok(DVec3::Z),
@@ -109,9 +126,14 @@ pub(crate) fn uniform_axis(
             if !spot && body.contains(*position, problem.eps()) {
                 return Err(LixelError::LightInsideFocus { method });
             }
-            let dirs: Vec<DVec3> = problem.mappable_vertices(body).iter().map(|&p| frame.homogeneous(p)).collect();
-            min_enclosing_cone(&dirs)
-                .filter(|cone| cone.cos_half_angle > problem.tolerances().min_front_cosine)
+            let mut dirs = ws.take_points();
+            problem.mappable_vertices_into(body, &mut dirs, ws);
+            for p in &mut dirs {
+                *p = frame.homogeneous(*p);
+            }
+            let cone = min_enclosing_cone_in(&dirs, &mut ws.units);
+            ws.put_points(dirs);
+            cone.filter(|cone| cone.cos_half_angle > problem.tolerances().min_front_cosine)
                 .map(|cone| cone.axis)
                 .ok_or(LixelError::LightInsideFocus { method })
         }

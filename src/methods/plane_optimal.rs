@@ -19,9 +19,10 @@
 use glam::{DMat3, DVec3};
 
 use crate::error::{check_finite, LixelError, Result};
-use crate::geometry::Plane;
+use crate::geometry::{ConvexPolyhedron, Plane};
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
+use crate::workspace::SolveWorkspace;
 
 /// Options of [`Parameterization::PlaneOptimal`](crate::Parameterization::PlaneOptimal).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,7 +55,11 @@ impl Default for PlaneOptimalOptions {
     }
 }
 
-pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> Result<LightMatrix> {
+pub(super) fn solve(
+    problem: &ShadowProblem,
+    options: &PlaneOptimalOptions,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
     let plane = match options.plane {
         Some(p) => {
             check_finite(&[p.normal.x, p.normal.y, p.normal.z, p.offset], "receiver plane")?;
@@ -69,27 +74,53 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
     if !(options.min_relative_w > 0.0 && options.min_relative_w < 1.0) {
         return Err(LixelError::InvalidPlane { reason: "min_relative_w must lie in (0, 1)" });
     }
-    let focus = problem.visible_receiver_body();
+    let mut focus = ws.take_body();
+    problem.visible_receiver_body_into(&mut focus, ws);
+    let result = solve_on(problem, options, &plane, &focus, ws);
+    ws.put_body(focus);
+    result
+}
+
+fn solve_on(
+    problem: &ShadowProblem,
+    options: &PlaneOptimalOptions,
+    plane: &Plane,
+    focus: &ConvexPolyhedron,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::PlaneOptimal, None);
+        return super::focused::solve_as(problem, Method::PlaneOptimal, None, ws);
     }
-    let frame = problem.frame_towards(&focus);
-    let focused_axis = super::uniform_axis(problem, &frame, &focus, Method::PlaneOptimal)?.normalize();
-    let Some(plane_axis) = plane_optimal_axis(problem, &frame, &plane) else {
-        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate));
+    let frame = problem.frame_towards(focus);
+    let focused_axis = super::uniform_axis(problem, &frame, focus, Method::PlaneOptimal, ws)?.normalize();
+    let Some(plane_axis) = plane_optimal_axis(problem, &frame, plane) else {
+        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate), ws);
     };
 
     // The visible part of the plane (a thin slab of the focus body).
     let slab = problem.coarse_eps();
-    let on_plane = focus.clip_all([plane.grown(slab), plane.flipped().grown(slab)].iter(), problem.eps());
+    let mut on_plane = ws.take_body();
+    focus.clip_all_into(
+        [plane.grown(slab), plane.flipped().grown(slab)].iter(),
+        problem.eps(),
+        &mut on_plane,
+        &mut ws.clip,
+    );
     if on_plane.is_empty() {
-        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneNotVisible));
+        ws.put_body(on_plane);
+        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneNotVisible), ws);
     }
     let beta = options.min_relative_w;
-    let directions = |body: &crate::geometry::ConvexPolyhedron| -> Vec<DVec3> {
-        problem.mappable_vertices(body).iter().map(|&p| cosine_frame(&frame, frame.homogeneous(p))).collect()
+    let directions = |body: &ConvexPolyhedron, ws: &mut SolveWorkspace| -> Vec<DVec3> {
+        let mut dirs = ws.take_points();
+        problem.mappable_vertices_into(body, &mut dirs, ws);
+        for p in &mut dirs {
+            *p = cosine_frame(&frame, frame.homogeneous(*p));
+        }
+        dirs
     };
-    let (plane_dirs, focus_dirs) = (directions(&on_plane), directions(&focus));
+    let (plane_dirs, focus_dirs) = (directions(&on_plane, ws), directions(focus, ws));
+    ws.put_body(on_plane);
     // Every relevant point must keep at least β times the smallest w of the
     // visible plane: points near the vanishing line would blow the map up.
     // Never closer to the vanishing line than the matrix builder accepts.
@@ -116,11 +147,13 @@ pub(super) fn solve(problem: &ShadowProblem, options: &PlaneOptimalOptions) -> R
         }
         (blended(hi), Some(Fallback::PlaneOptimalBlended { blend: hi }))
     };
+    ws.put_points(focus_dirs);
+    ws.put_points(plane_dirs);
     // So near the plane's vanishing line that f64 cannot hold the map (a
     // light grazing the plane): the plane is degenerate for this light.
     problem
-        .place(frame, axis, &focus, Method::PlaneOptimal, fallback)
-        .or_else(|_| super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate)))
+        .place(frame, axis, focus, Method::PlaneOptimal, fallback, ws)
+        .or_else(|_| super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate), ws))
 }
 
 /// The unit plane-optimal axis in light coordinates of `frame`, or `None`

@@ -29,10 +29,11 @@
 use glam::{DMat4, DVec3, DVec4};
 
 use crate::error::Result;
-use crate::geometry::{min_enclosing_cone, ConvexPolyhedron};
+use crate::geometry::{min_enclosing_cone_in, ConvexPolyhedron};
 use crate::light::LightFrame;
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
+use crate::workspace::SolveWorkspace;
 
 /// Options of [`Parameterization::Psm`](crate::Parameterization::Psm).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,31 +116,45 @@ fn classify(problem: &ShadowProblem, light: DVec4) -> PsmLightCase {
     }
 }
 
-pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions) -> Result<LightMatrix> {
-    let focus = problem.visible_receiver_body();
+pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
+    let mut focus = ws.take_body();
+    problem.visible_receiver_body_into(&mut focus, ws);
+    let result = solve_for(problem, options, &focus, ws);
+    ws.put_body(focus);
+    result
+}
+
+fn solve_for(
+    problem: &ShadowProblem,
+    options: &PsmOptions,
+    focus: &ConvexPolyhedron,
+    ws: &mut SolveWorkspace,
+) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::Psm, None);
+        return super::focused::solve_as(problem, Method::Psm, None, ws);
     }
     if problem.camera().is_orthographic() {
-        return super::focused::solve_as(problem, Method::Psm, Some(Fallback::OrthographicCamera));
+        return super::focused::solve_as(problem, Method::Psm, Some(Fallback::OrthographicCamera), ws);
     }
-    let hull = problem.psm_hull();
-    let frame = problem.frame_towards(&focus);
+    let mut hull = ws.take_body();
+    problem.psm_hull_into(&mut hull, ws);
+    let frame = problem.frame_towards(focus);
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
     // alone, and failing that use the focused map.
-    if let Some(matrix) =
-        psm_axis(problem, options, &hull, &frame).and_then(|axis| place(problem, frame, axis, &hull, &focus, None).ok())
-    {
+    let first = psm_axis(problem, options, &hull, &frame, ws)
+        .and_then(|axis| place(problem, frame, axis, &hull, focus, None, ws).ok());
+    ws.put_body(hull);
+    if let Some(matrix) = first {
         return Ok(matrix);
     }
     let fallback = Some(Fallback::PsmHullAroundLight);
-    if let Some(matrix) = psm_axis(problem, options, &focus, &frame)
-        .and_then(|axis| place(problem, frame, axis, &focus, &focus, fallback).ok())
+    if let Some(matrix) = psm_axis(problem, options, focus, &frame, ws)
+        .and_then(|axis| place(problem, frame, axis, focus, focus, fallback, ws).ok())
     {
         return Ok(matrix);
     }
-    super::focused::solve_as(problem, Method::Psm, fallback)
+    super::focused::solve_as(problem, Method::Psm, fallback, ws)
 }
 
 /// Map around `region` (with the visible receivers), depth over their casters.
@@ -150,17 +165,27 @@ fn place(
     region: &ConvexPolyhedron,
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
+    ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
-    let mut points = problem.mappable_vertices(region);
-    points.extend(problem.mappable_vertices(focus));
+    let mut points = ws.take_points();
+    problem.mappable_vertices_into(region, &mut points, ws);
+    let mut more = ws.take_points();
+    problem.mappable_vertices_into(focus, &mut more, ws);
+    points.extend_from_slice(&more);
     // Depth covers the casters of the visible receivers and all of `region`
     // (for `H`, which holds casters itself, the light included when it lies
     // in `S`: such a map needs unclipped depth).
-    let mut depth_points = problem.caster_body(focus).vertices().to_vec();
+    let mut casters = ws.take_body();
+    problem.caster_body_into(focus, &mut casters, ws);
+    let mut depth_points = more;
+    depth_points.clear();
+    depth_points.extend_from_slice(casters.vertices());
     depth_points.extend_from_slice(region.vertices());
-    problem
-        .placement(frame, axis, &points, &depth_points, Method::Psm, fallback)
-        .build(&mut crate::fit::FitWorkspace::default())
+    ws.put_body(casters);
+    let result = problem.placement(frame, axis, &points, &depth_points, Method::Psm, fallback).build_in(ws);
+    ws.put_points(depth_points);
+    ws.put_points(points);
+    result
 }
 
 /// PSM's optical axis for `region`, in light coordinates of `frame`; `None`
@@ -170,21 +195,22 @@ fn psm_axis(
     options: &PsmOptions,
     region: &ConvexPolyhedron,
     frame: &LightFrame,
+    ws: &mut SolveWorkspace,
 ) -> Option<DVec3> {
     if region.is_empty() {
         return None;
     }
     let pps = post_perspective(problem, options, region);
     let l = pps.light;
-    let dirs: Vec<DVec3> = problem
-        .mappable_vertices(region)
-        .iter()
-        .map(|&p| {
-            let q = pps.clip_from_world * p.extend(1.0);
-            q.truncate() * l.w - l.truncate() * q.w
-        })
-        .collect();
-    let cone = min_enclosing_cone(&dirs)?;
+    let mut dirs = ws.take_points();
+    problem.mappable_vertices_into(region, &mut dirs, ws);
+    for p in &mut dirs {
+        let q = pps.clip_from_world * p.extend(1.0);
+        *p = q.truncate() * l.w - l.truncate() * q.w;
+    }
+    let cone = min_enclosing_cone_in(&dirs, &mut ws.units);
+    ws.put_points(dirs);
+    let cone = cone?;
     if cone.cos_half_angle <= problem.tolerances().min_front_cosine {
         return None;
     }

@@ -11,6 +11,7 @@
 //! its buffers) every few frames per light; [`ShadowScheduler`] keeps the
 //! per-light state and the paper's cadence.
 
+mod extract;
 mod objective;
 mod samples;
 mod schedule;
@@ -21,9 +22,10 @@ use glam::{DMat3, DVec2, DVec3};
 
 use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
-use crate::geometry::min_enclosing_cone;
+use crate::geometry::min_enclosing_cone_in;
 use crate::matrix::{fit_homography, holds_all, AxisFit, Fallback, LightMatrix, Method};
 
+pub use extract::SampleWorkspace;
 pub use objective::{objective, objective_gradient, plane_frame_gradient, sample_badness, BoundarySample};
 pub use samples::{PixelRect, Readback, ReadbackDepth, ReadbackLayout, RowOrder, SampleCounts, SampleOptions, Samples};
 pub use schedule::{AnalysisPlan, FramePlan, ScheduleOptions, ShadowScheduler};
@@ -231,8 +233,10 @@ pub fn optimize_lights(
     }
 }
 
-/// The optimizer with reusable buffers: repeated calls allocate nothing new
-/// once the buffers have grown to the largest sample set seen.
+/// The optimizer with reusable buffers: once they have grown to the largest
+/// sample set seen, a call allocates only its report's
+/// [`angles_tried`](OptimizeReport::angles_tried) (once, at its final size;
+/// `tests/optimize_memory.rs` counts).
 #[derive(Clone, Debug)]
 pub struct Optimizer {
     options: OptimizeOptions,
@@ -240,6 +244,10 @@ pub struct Optimizer {
     projected: Vec<DVec2>,
     extreme: Vec<DVec3>,
     badness: Vec<f64>,
+    /// Scratch of the extreme rays' hull and of the enclosing cone.
+    sorted: Vec<DVec2>,
+    hull: Vec<DVec2>,
+    units: Vec<DVec3>,
 }
 
 /// A candidate axis with its fitted homography (NDC) and objective.
@@ -254,7 +262,16 @@ impl Optimizer {
     /// An optimizer with `options`.
     #[must_use]
     pub fn new(options: OptimizeOptions) -> Self {
-        Self { options, fit: FitWorkspace::default(), projected: Vec::new(), extreme: Vec::new(), badness: Vec::new() }
+        Self {
+            options,
+            fit: FitWorkspace::default(),
+            projected: Vec::new(),
+            extreme: Vec::new(),
+            badness: Vec::new(),
+            sorted: Vec::new(),
+            hull: Vec::new(),
+            units: Vec::new(),
+        }
     }
 
     /// The options.
@@ -444,11 +461,11 @@ impl Optimizer {
         let (e1, e2) = axis.any_orthonormal_pair();
         self.projected.clear();
         self.projected.extend(samples.relevant.iter().map(|x| DVec2::new(e1.dot(*x), e2.dot(*x)) / axis.dot(*x)));
-        let hull = crate::fit::convex_hull_2d(&self.projected);
+        crate::fit::convex_hull_2d_into(&self.projected, &mut self.sorted, &mut self.hull);
         self.extreme.clear();
         // Unnormalized: for a directional light this restores X~ = (s, t, 1)
         // exactly, which the depth row's `w_min` needs.
-        self.extreme.extend(hull.iter().map(|s| e1 * s.x + e2 * s.y + axis));
+        self.extreme.extend(self.hull.iter().map(|s| e1 * s.x + e2 * s.y + axis));
         if self.extreme.is_empty() {
             return Err(LixelError::UnusableSamples { reason: "no finite relevant sample" });
         }
@@ -456,11 +473,11 @@ impl Optimizer {
     }
 
     /// An axis in front of every relevant sample.
-    fn cone_axis(&self, samples: &Samples) -> Result<DVec3> {
+    fn cone_axis(&mut self, samples: &Samples) -> Result<DVec3> {
         if samples.frame.is_orthographic() {
             return Ok(DVec3::Z);
         }
-        min_enclosing_cone(&samples.relevant)
+        min_enclosing_cone_in(&samples.relevant, &mut self.units)
             .filter(|c| c.cos_half_angle > samples.problem.tolerances().min_front_cosine)
             .map(|c| c.axis)
             .ok_or(LixelError::UnusableSamples { reason: "relevant samples surround the light" })

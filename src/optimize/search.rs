@@ -22,7 +22,8 @@ pub(super) fn paper(
 ) -> Candidate {
     let mut best = start;
     let map = samples.problem.map_size();
-    let angles = optimizer.options.angles_degrees.clone();
+    let tries = optimizer.options.iterations.saturating_mul(optimizer.options.angles_degrees.len());
+    report.angles_tried.reserve_exact(tries.min(1 << 16));
     for _ in 0..optimizer.options.iterations {
         report.iterations += 1;
         let j = best.axis;
@@ -36,7 +37,8 @@ pub(super) fn paper(
         let downhill = -(gradient - j * gradient.dot(j));
         let Some(rotation_axis) = j.cross(downhill).try_normalize() else { break };
         let mut improved = None::<Candidate>;
-        for &degrees in &angles {
+        for k in 0..optimizer.options.angles_degrees.len() {
+            let degrees = optimizer.options.angles_degrees[k];
             report.angles_tried.push(degrees);
             let turned = DQuat::from_axis_angle(rotation_axis, degrees.to_radians()) * j;
             if let Some(candidate) = optimizer.candidate(samples, turned) {

@@ -152,6 +152,11 @@ pub fn config(seed: u64, index: usize) -> Config {
 /// A small synthetic scene (floor, two spheres, a box) in front of a fixed
 /// camera, one problem per light, and its 96x96 readback.
 pub fn setup(lights: &[Light]) -> (Vec<ShadowProblem>, SyntheticReadback) {
+    setup_with_eye(lights, DVec3::new(0.0, 1.7, 4.0))
+}
+
+/// [`setup`] with the camera at `eye` (still looking at the scene).
+pub fn setup_with_eye(lights: &[Light], eye: DVec3) -> (Vec<ShadowProblem>, SyntheticReadback) {
     let scene = SyntheticScene {
         floor: Some((0.0, 20.0)),
         spheres: vec![
@@ -160,16 +165,9 @@ pub fn setup(lights: &[Light]) -> (Vec<ShadowProblem>, SyntheticReadback) {
         ],
         boxes: vec![Aabb::from_corners(DVec3::new(-4.0, 0.0, -8.0), DVec3::new(-2.0, 3.0, -6.0))],
     };
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 1.7, 4.0),
-        DVec3::new(0.0, 0.5, -6.0),
-        DVec3::Y,
-        60f64.to_radians(),
-        UVec2::new(800, 800),
-        0.1,
-        60.0,
-    )
-    .unwrap();
+    let camera =
+        Camera::look_at(eye, DVec3::new(0.0, 0.5, -6.0), DVec3::Y, 60f64.to_radians(), UVec2::new(800, 800), 0.1, 60.0)
+            .unwrap();
     let problems = lights
         .iter()
         .map(|&l| ShadowProblem::new(camera, l, scene.bounds().unwrap(), ShadowMapSize::square(512)).unwrap())

@@ -1,0 +1,344 @@
+//! Clipping a [`ConvexPolyhedron`] by a plane into reusable buffers, and the
+//! hole-boundary walk that closes the cut (shared with the point hull).
+//!
+//! Everything a clip needs besides its result lives in a [`ClipWorkspace`],
+//! so that repeated clips (every classical method clips a few bodies per
+//! call) allocate nothing once the buffers have grown: malloc and free were
+//! about a fifth of a focused solve before (issue 15).
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use super::polyhedron::FaceSpan;
+use super::{ConvexPolyhedron, Plane};
+
+/// Scratch buffers for [`ConvexPolyhedron::clip_into`] and the other
+/// `_into` operations. Holds no result: any workspace may be used with any
+/// body, and its content between calls is meaningless.
+#[derive(Clone, Debug, Default)]
+pub struct ClipWorkspace {
+    dist: Vec<f64>,
+    side: Vec<Side>,
+    new_index: Vec<usize>,
+    /// The cut point of each crossed edge (sorted vertex pair), in the order
+    /// made: a clip makes a handful, so a list beats a hash map.
+    cuts: Vec<((usize, usize), usize)>,
+    /// Per new vertex: on the plane (kept within `eps` of it, or a cut point).
+    on_plane: Vec<bool>,
+    pub(super) edges: IndexMap<(usize, usize), usize>,
+    walker: LoopWalker,
+    pub(super) flags: Vec<bool>,
+    pub(super) silhouette: Vec<(usize, usize, usize, usize)>,
+    /// The second body of a chain of clips (swapped with the result).
+    pub(super) spare: ConvexPolyhedron,
+    /// Tests only: find the cap's boundary by looking up every edge's
+    /// reverse in all faces (the reference the fast path must equal).
+    #[cfg(test)]
+    pub(super) reference_boundary: bool,
+}
+
+impl ClipWorkspace {
+    /// An empty workspace; its buffers grow on first use.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// Where a vertex lies relative to a clipping plane, with tolerance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Side {
+    Inside,
+    On,
+    Outside,
+}
+
+impl Side {
+    fn of(distance: f64, eps: f64) -> Side {
+        if distance > eps {
+            Side::Outside
+        } else if distance < -eps {
+            Side::Inside
+        } else {
+            Side::On
+        }
+    }
+
+    /// Whether an edge between the two sides crosses the plane strictly.
+    fn is_opposite(self, other: Side) -> bool {
+        matches!((self, other), (Side::Inside, Side::Outside) | (Side::Outside, Side::Inside))
+    }
+}
+
+impl ConvexPolyhedron {
+    /// The clip of [`clip`](Self::clip) (see there for the algorithm) into
+    /// `out`; returns `false`, leaving `out` untouched, when the result is
+    /// `self` unchanged.
+    pub(super) fn clip_core(&self, plane: &Plane, eps: f64, out: &mut Self, workspace: &mut ClipWorkspace) -> bool {
+        if self.is_empty() || !plane.is_finite() {
+            out.clear();
+            return true;
+        }
+        let eps = eps.max(0.0);
+        #[cfg(test)]
+        let reference = workspace.reference_boundary;
+        let ClipWorkspace { dist, side, new_index, cuts, on_plane, edges, walker, .. } = workspace;
+        dist.clear();
+        dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
+        side.clear();
+        side.extend(dist.iter().map(|&d| Side::of(d, eps)));
+        if !side.contains(&Side::Outside) {
+            return false;
+        }
+        out.clear();
+        if !side.contains(&Side::Inside) {
+            return true;
+        }
+
+        // Kept vertices first, under their new indices; cut points follow.
+        let Self { vertices, faces, indices } = out;
+        new_index.clear();
+        new_index.resize(self.vertices.len(), usize::MAX);
+        for (i, &v) in self.vertices.iter().enumerate() {
+            if side[i] != Side::Outside {
+                new_index[i] = vertices.len();
+                vertices.push(v);
+            }
+        }
+        cuts.clear();
+        for face in &self.faces {
+            let start = indices.len();
+            let loop_indices = &self.indices[face.start..face.end];
+            for (a, b) in loop_edges(loop_indices) {
+                if side[a] != Side::Outside {
+                    indices.push(new_index[a]);
+                }
+                if side[a].is_opposite(side[b]) {
+                    let key = (a.min(b), a.max(b));
+                    let cut = match cuts.iter().find(|(k, _)| *k == key) {
+                        Some(&(_, cut)) => cut,
+                        None => {
+                            let (i, j) = key;
+                            let t = dist[i] / (dist[i] - dist[j]);
+                            vertices.push(self.vertices[i].lerp(self.vertices[j], t));
+                            cuts.push((key, vertices.len() - 1));
+                            vertices.len() - 1
+                        }
+                    };
+                    indices.push(cut);
+                }
+            }
+            // A face with nothing strictly inside lies in the cap (to within
+            // eps): the cap replaces it.
+            let keeps_inside = loop_indices.iter().any(|&i| side[i] == Side::Inside);
+            if keeps_inside && indices.len() - start >= 3 {
+                faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+            } else {
+                indices.truncate(start);
+            }
+        }
+
+        // The new vertices on the plane: kept ones within eps of it, then
+        // every cut point.
+        on_plane.clear();
+        on_plane.extend(
+            self.vertices.iter().zip(side.iter()).filter(|&(_, &s)| s != Side::Outside).map(|(_, &s)| s == Side::On),
+        );
+        on_plane.resize(vertices.len(), true);
+        walker.collect_cap_boundary(faces, indices, on_plane);
+        #[cfg(test)]
+        if reference {
+            half_edge_faces(edges, faces, indices);
+            walker.collect_boundary(faces, indices, edges);
+        }
+        #[cfg(not(test))]
+        let _ = edges;
+        walker.walk(vertices.len(), |cycle| {
+            let start = indices.len();
+            indices.extend_from_slice(cycle);
+            faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
+        });
+        out.finish_parts(new_index);
+        true
+    }
+}
+
+/// The directed edges `(from, to)` of a face loop, in order.
+pub(super) fn loop_edges(indices: &[usize]) -> impl Iterator<Item = (usize, usize)> + '_ {
+    // Indexing, not `cycle().skip(1)`: the skip was a visible cost of every clip.
+    let n = indices.len();
+    (0..n).map(move |k| (indices[k], indices[if k + 1 == n { 0 } else { k + 1 }]))
+}
+
+/// A hash map keyed by vertex indices. The keys are small trusted integers
+/// and the maps are only looked up, never iterated (results do not depend on
+/// hashing), so a multiply-rotate hash replaces SipHash, which was ~40% of a
+/// focused solve (callgrind, issue 15).
+pub(super) type IndexMap<K, V> = HashMap<K, V, BuildHasherDefault<IndexHasher>>;
+
+/// Multiply-rotate hasher for [`IndexMap`].
+#[derive(Clone, Copy, Default)]
+pub(super) struct IndexHasher(u64);
+
+impl Hasher for IndexHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+}
+
+/// Fills `map` (cleared first) with each directed edge of the faces and the
+/// index of its face.
+pub(super) fn half_edge_faces(map: &mut IndexMap<(usize, usize), usize>, faces: &[FaceSpan], indices: &[usize]) {
+    map.clear();
+    for (i, face) in faces.iter().enumerate() {
+        map.extend(loop_edges(&indices[face.start..face.end]).map(|edge| (edge, i)));
+    }
+}
+
+/// The holes in a surface of faces, each as a simple loop of vertex indices
+/// in the order a face filling it runs (counter-clockwise from outside).
+///
+/// # Algorithm
+///
+/// A boundary edge is a directed edge `(a, b)` whose reverse is in no face;
+/// a face filling the hole runs it as `b → a`. These reversed edges form a
+/// balanced directed graph (every vertex has as many in as out), which a
+/// walk splits into simple cycles: follow unused edges, and whenever the walk
+/// returns to a vertex already on its path, cut off the loop it closed.
+/// Normally there is one hole with a simple boundary; a boundary touching
+/// itself at a vertex yields several loops. The edges leaving a vertex are
+/// kept in one flat array (counting sort by vertex) and taken last first.
+#[derive(Clone, Debug, Default)]
+pub(super) struct LoopWalker {
+    /// Reversed boundary edges `(from, to)`, in the order the faces run them.
+    boundary: Vec<(usize, usize)>,
+    /// Per vertex, where its edges start in `targets` (one extra entry).
+    offset: Vec<usize>,
+    /// Per vertex, how many of its edges are still unused.
+    left: Vec<usize>,
+    targets: Vec<usize>,
+    path: Vec<usize>,
+}
+
+impl LoopWalker {
+    /// Collects the boundary edges of the faces; `edge_faces` is their
+    /// [`half_edge_faces`].
+    pub(super) fn collect_boundary(
+        &mut self,
+        faces: &[FaceSpan],
+        indices: &[usize],
+        edge_faces: &IndexMap<(usize, usize), usize>,
+    ) {
+        self.boundary.clear();
+        for face in faces {
+            for (a, b) in loop_edges(&indices[face.start..face.end]) {
+                if !edge_faces.contains_key(&(b, a)) {
+                    self.boundary.push((b, a));
+                }
+            }
+        }
+    }
+
+    /// Collects the boundary edges of the faces left by a clip, where
+    /// `on_plane` marks the vertices on the clipping plane.
+    ///
+    /// Only an edge with both ends on the plane can lack its reverse: the
+    /// clip keeps every face with a vertex strictly inside, and such a
+    /// vertex's edges (to a kept neighbour or to the cut point on the edge
+    /// towards an outside one) appear reversed in the face across, which
+    /// meets the same vertex and the same shared cut point. So the few edges
+    /// along the plane are matched among themselves, in the faces' order,
+    /// which finds exactly the edges (and the order) a lookup of every edge's
+    /// reverse in all faces would.
+    pub(super) fn collect_cap_boundary(&mut self, faces: &[FaceSpan], indices: &[usize], on_plane: &[bool]) {
+        let Self { boundary, targets: along, .. } = self;
+        // `along` holds the plane edges as pairs `a, b`, flattened.
+        along.clear();
+        for face in faces {
+            for (a, b) in loop_edges(&indices[face.start..face.end]) {
+                if on_plane[a] && on_plane[b] {
+                    along.extend([a, b]);
+                }
+            }
+        }
+        boundary.clear();
+        for edge in along.chunks_exact(2) {
+            let (a, b) = (edge[0], edge[1]);
+            if !along.chunks_exact(2).any(|e| e[0] == b && e[1] == a) {
+                boundary.push((b, a));
+            }
+        }
+    }
+
+    /// Splits the collected boundary (over vertices `0..vertex_count`) into
+    /// loops, handing each to `emit` as it closes.
+    pub(super) fn walk(&mut self, vertex_count: usize, mut emit: impl FnMut(&[usize])) {
+        let Self { boundary, offset, left, targets, path } = self;
+        if boundary.is_empty() {
+            return;
+        }
+        offset.clear();
+        offset.resize(vertex_count + 1, 0);
+        for &(from, _) in boundary.iter() {
+            offset[from + 1] += 1;
+        }
+        for v in 0..vertex_count {
+            offset[v + 1] += offset[v];
+        }
+        left.clear();
+        left.resize(vertex_count, 0);
+        targets.clear();
+        targets.resize(boundary.len(), 0);
+        for &(from, to) in boundary.iter() {
+            targets[offset[from] + left[from]] = to;
+            left[from] += 1;
+        }
+        for &(start, _) in boundary.iter() {
+            path.clear();
+            path.push(start);
+            while let Some(&v) = path.last() {
+                if left[v] == 0 {
+                    break;
+                }
+                left[v] -= 1;
+                let w = targets[offset[v] + left[v]];
+                if let Some(i) = path.iter().position(|&u| u == w) {
+                    emit(&path[i..]);
+                    path.truncate(i);
+                }
+                path.push(w);
+            }
+        }
+    }
+}
+
+/// The loops [`LoopWalker`] finds for the given faces (for tests).
+#[cfg(test)]
+pub(super) fn walk_loops(faces: &[(Plane, Vec<usize>)]) -> Vec<Vec<usize>> {
+    let mut body = ConvexPolyhedron::empty();
+    let mut vertex_count = 0;
+    for (plane, loop_indices) in faces {
+        let start = body.indices.len();
+        body.indices.extend_from_slice(loop_indices);
+        body.faces.push(FaceSpan { plane: *plane, start, end: body.indices.len() });
+        vertex_count = vertex_count.max(loop_indices.iter().max().map_or(0, |&m| m + 1));
+    }
+    let mut edges = IndexMap::default();
+    half_edge_faces(&mut edges, &body.faces, &body.indices);
+    let mut walker = LoopWalker::default();
+    walker.collect_boundary(&body.faces, &body.indices, &edges);
+    let mut loops = Vec::new();
+    walker.walk(vertex_count, |cycle| loops.push(cycle.to_vec()));
+    loops
+}

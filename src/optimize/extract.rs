@@ -1,0 +1,462 @@
+//! One pass over a readback for the samples of every light: the readback
+//! brought to lixel's convention ([`Grid`]), each pixel's shadowed/lit
+//! classes and their 3x3 neighbourhood, and the per-pixel world point and
+//! surface derivatives shared by all lights.
+//!
+//! The buffers live in a [`SampleWorkspace`] so that an engine extracting
+//! every analysis frame reuses them ([`Samples::from_readback_all_into`]).
+
+use glam::{DVec3, DVec4};
+
+use super::samples::{PixelRect, Readback, ReadbackDepth, RowOrder, SampleOptions, Samples};
+use crate::error::{LixelError, Result};
+use crate::light::Light;
+use crate::optimize::objective::BoundarySample;
+
+/// Reusable buffers for sample extraction ([`Samples::from_readback_into`],
+/// [`Samples::from_readback_all_into`]): the readback in lixel's convention
+/// and the per-pixel classes. Holds no result between calls.
+#[derive(Clone, Debug, Default)]
+pub struct SampleWorkspace {
+    pub(super) grid: Grid,
+    classes: Classes,
+    pub(super) bits: Vec<u32>,
+}
+
+impl SampleWorkspace {
+    /// An empty workspace; its buffers grow on first use.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// A readback brought to lixel's convention: top-down rows, lixel depth
+/// (non-finite where nothing was drawn), screen placement.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Grid {
+    width: usize,
+    height: usize,
+    depth: Vec<f64>,
+    bits: Vec<u32>,
+    normals: Vec<[f32; 3]>,
+    has_normals: bool,
+    /// Screen position of the readback's top-left corner, full-resolution pixels.
+    origin: glam::DVec2,
+    /// Full-resolution pixels per readback pixel.
+    step: glam::DVec2,
+}
+
+impl Grid {
+    /// The read-back normals, if any.
+    fn normals(&self) -> Option<&[[f32; 3]]> {
+        self.has_normals.then_some(self.normals.as_slice())
+    }
+
+    /// Brings `readback` (of `camera`'s view) to lixel's convention, reusing
+    /// the buffers.
+    pub(super) fn fill(&mut self, camera: &crate::Camera, readback: &Readback<'_>) -> Result<()> {
+        use crate::conventions::DepthDirection;
+        let (w, h) = (readback.width as usize, readback.height as usize);
+        let layout = readback.layout;
+        let viewport = camera.viewport();
+        let rect = layout.rect.unwrap_or(PixelRect { x: 0, y: 0, width: viewport.x, height: viewport.y });
+        let inside = rect.width > 0
+            && rect.height > 0
+            && u64::from(rect.x) + u64::from(rect.width) <= u64::from(viewport.x)
+            && u64::from(rect.y) + u64::from(rect.height) <= u64::from(viewport.y);
+        if !inside {
+            return Err(LixelError::UnusableSamples { reason: "readback rectangle is empty or outside the viewport" });
+        }
+        let reverse = camera.conventions().depth == DepthDirection::Reverse;
+        match layout.depth {
+            ReadbackDepth::WindowReversed if !reverse => {
+                return Err(LixelError::UnusableSamples {
+                    reason: "readback depth is reverse-Z but the camera's projection is forward-Z",
+                })
+            }
+            ReadbackDepth::Window | ReadbackDepth::GlWindow if reverse => {
+                return Err(LixelError::UnusableSamples {
+                    reason: "readback depth is forward-Z but the camera's projection is reverse-Z",
+                })
+            }
+            _ => {}
+        }
+        let top = match layout.rows {
+            RowOrder::TopDown => rect.y,
+            RowOrder::BottomUp => viewport.y - rect.y - rect.height,
+        };
+        let to_lixel = |v: f32| -> f64 {
+            let v = f64::from(v);
+            if !v.is_finite() {
+                return f64::NAN;
+            }
+            let lixel = match layout.depth {
+                ReadbackDepth::Lixel => v,
+                ReadbackDepth::Window if v >= 1.0 => f64::NAN,
+                ReadbackDepth::WindowReversed if v <= 0.0 => f64::NAN,
+                ReadbackDepth::GlWindow if v >= 1.0 => f64::NAN,
+                ReadbackDepth::Window | ReadbackDepth::WindowReversed => {
+                    camera.depth_at_distance(camera.distance_at_source_depth(v))
+                }
+                ReadbackDepth::GlWindow => camera.depth_at_distance(camera.distance_at_source_depth(2.0 * v - 1.0)),
+                ReadbackDepth::LinearView => camera.depth_at_distance(v),
+            };
+            if lixel.is_finite() && (0.0..1.0).contains(&lixel) {
+                lixel
+            } else {
+                f64::NAN
+            }
+        };
+        let source_row = |y: usize| match layout.rows {
+            RowOrder::TopDown => y,
+            RowOrder::BottomUp => h - 1 - y,
+        };
+        let rows = |y: usize| source_row(y) * w..source_row(y) * w + w;
+        self.width = w;
+        self.height = h;
+        self.origin = glam::DVec2::new(f64::from(rect.x), f64::from(top));
+        self.step = glam::DVec2::new(f64::from(rect.width) / w as f64, f64::from(rect.height) / h as f64);
+        self.depth.clear();
+        self.bits.clear();
+        self.normals.clear();
+        self.has_normals = readback.normals.is_some();
+        // Row by row over exact-size slices (a flat_map over rows was half
+        // the cost of a one-light extraction).
+        for y in 0..h {
+            let row = rows(y);
+            match layout.depth {
+                // The common case without conversion: what `to_lixel` does
+                // for it, inline.
+                ReadbackDepth::Lixel => self.depth.extend(readback.depth[row.clone()].iter().map(|&v| {
+                    let v = f64::from(v);
+                    if (0.0..1.0).contains(&v) {
+                        v
+                    } else {
+                        f64::NAN
+                    }
+                })),
+                _ => self.depth.extend(readback.depth[row.clone()].iter().map(|&v| to_lixel(v))),
+            }
+            self.bits.extend_from_slice(&readback.shadow_bits[row.clone()]);
+            if let Some(normals) = readback.normals {
+                self.normals.extend_from_slice(&normals[row]);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The buffers match the readback's size.
+pub(super) fn check_readback(readback: &Readback<'_>) -> Result<()> {
+    let n = readback.width as usize * readback.height as usize;
+    if readback.depth.len() != n
+        || readback.shadow_bits.len() != n
+        || readback.normals.is_some_and(|normals| normals.len() != n)
+    {
+        return Err(LixelError::UnusableSamples { reason: "readback buffers do not match its size" });
+    }
+    Ok(())
+}
+
+/// OR of `src` over each pixel's 3x3 neighbourhood (clamped at the edges),
+/// separably, into `dst` (`tmp` is scratch).
+fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
+    src: &[T],
+    w: usize,
+    h: usize,
+    tmp: &mut Vec<T>,
+    dst: &mut Vec<T>,
+) {
+    tmp.clear();
+    tmp.resize(src.len(), T::default());
+    for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        for x in 0..w {
+            t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
+        }
+    }
+    dst.clear();
+    dst.resize(src.len(), T::default());
+    for y in 0..h {
+        let (above, here, below) =
+            (&tmp[y.saturating_sub(1) * w..][..w], &tmp[y * w..][..w], &tmp[(y + 1).min(h - 1) * w..][..w]);
+        for (x, cell) in dst[y * w..][..w].iter_mut().enumerate() {
+            *cell = above[x] | here[x] | below[x];
+        }
+    }
+}
+
+/// Per pixel and light slot `k` (the `k`-th light extracted): shadowed, and
+/// lit, over covered pixels; and the OR of both over the 3x3 neighbourhood,
+/// so a slot both shadowed and lit nearby marks a shadow boundary. One light
+/// packs into a byte (bit 0 shadowed, bit 1 lit); up to 32 into a `u64`
+/// (shadowed slots in the low half, lit in the high half), so one pass
+/// serves every light.
+#[derive(Clone, Debug, Default)]
+struct Classes {
+    /// One light (bytes) or several (`u64`s).
+    one: bool,
+    class8: Vec<u8>,
+    near8: Vec<u8>,
+    tmp8: Vec<u8>,
+    class64: Vec<u64>,
+    near64: Vec<u64>,
+    tmp64: Vec<u64>,
+}
+
+impl Classes {
+    fn fill(&mut self, grid: &Grid, bits: &[u32]) {
+        let (w, h) = (grid.width, grid.height);
+        let valid = |d: f64| d.is_finite();
+        let pixels = grid.depth.iter().zip(&grid.bits);
+        if let [bit] = *bits {
+            self.one = true;
+            self.class8.clear();
+            self.class8.extend(pixels.map(|(&d, &b)| match (valid(d), b >> bit & 1 != 0) {
+                (false, _) => 0,
+                (true, true) => 1,
+                (true, false) => 2,
+            }));
+            or_3x3(&self.class8, w, h, &mut self.tmp8, &mut self.near8);
+            return;
+        }
+        self.one = false;
+        self.class64.clear();
+        self.class64.extend(pixels.map(|(&d, &b)| {
+            if !valid(d) {
+                return 0;
+            }
+            bits.iter()
+                .enumerate()
+                .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
+        }));
+        or_3x3(&self.class64, w, h, &mut self.tmp64, &mut self.near64);
+    }
+
+    /// Slots shadowed at pixel `i`, and slots with a shadow boundary there.
+    fn at(&self, i: usize) -> (u32, u32) {
+        if self.one {
+            let (class, near) = (self.class8[i], self.near8[i]);
+            (u32::from(class & 1), u32::from(near & (near >> 1) & 1))
+        } else {
+            let (class, near) = (self.class64[i], self.near64[i]);
+            (class as u32, near as u32 & (near >> 32) as u32)
+        }
+    }
+}
+
+/// Fills `all[k]` (already reset to their bodies, no samples) from the
+/// readback in `workspace.grid` for light bit `workspace.bits[k]` (at most 32
+/// lights), in one pass over the pixels.
+pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, options: &SampleOptions) {
+    let SampleWorkspace { grid, classes, bits } = workspace;
+    let grid = &*grid;
+    let (w, h) = (grid.width, grid.height);
+    let n = w * h;
+    if n == 0 || all.is_empty() {
+        return;
+    }
+    // Every light's problem shares the camera (the readback is its view).
+    let camera = *all[0].problem.camera();
+    let world_from_screen = camera.screen_from_world().inverse();
+    let step = grid.step;
+    // Lixel depth, non-finite where nothing was drawn (see `Grid`).
+    let depth_at = |x: usize, y: usize| -> Option<f64> {
+        let d = grid.depth[y * w + x];
+        d.is_finite().then_some(d)
+    };
+    // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
+    let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
+        let v = world_from_screen * DVec4::new(sx, sy, d, 1.0);
+        if v.w < 0.0 {
+            -v
+        } else {
+            v
+        }
+    };
+    classes.fill(grid, bits);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if !grid.depth[i].is_finite() {
+                continue;
+            }
+            let (shadowed_bits, mixed_bits) = classes.at(i);
+            for (bit, samples) in all.iter_mut().enumerate() {
+                samples.counts.covered += 1;
+                samples.counts.shadowed += (shadowed_bits >> bit & 1) as usize;
+            }
+            let active = shadowed_bits | mixed_bits;
+            if active == 0 {
+                continue;
+            }
+            let d = grid.depth[i];
+            let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let here = unproject(sx, sy, d);
+            if !(here.w > 0.0) || !here.is_finite() {
+                for (bit, samples) in all.iter_mut().enumerate() {
+                    samples.counts.rejected_invalid += (active >> bit & 1) as usize;
+                }
+                continue;
+            }
+            let world = here.truncate() / here.w;
+            // Light-independent surface derivatives, computed on first use.
+            let mut surface: Option<Option<Surface>> = None;
+            for (bit, samples) in all.iter_mut().enumerate() {
+                if active >> bit & 1 == 0 {
+                    continue;
+                }
+                let frame = samples.frame;
+                let x_light = frame.homogeneous4(here);
+                samples.relevant.push(x_light);
+                samples.relevant_world.push(world);
+                samples.depth_points.push(world);
+                if mixed_bits >> bit & 1 == 0 {
+                    continue;
+                }
+                samples.counts.boundary_candidates += 1;
+                let found = *surface.get_or_insert_with(|| {
+                    surface_at(
+                        grid,
+                        &world_from_screen,
+                        &camera,
+                        options,
+                        (x, y),
+                        (sx, sy, d),
+                        here,
+                        world,
+                        step,
+                        &depth_at,
+                    )
+                });
+                let Some(found) = found else {
+                    samples.counts.rejected_discontinuity += 1;
+                    continue;
+                };
+                let sample = match found {
+                    Surface::Given { tx, ty, .. } => {
+                        let along = |t: DVec3| frame.homogeneous4(t.extend(0.0));
+                        BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+                    }
+                    Surface::Depth { dx4, dy4, .. } => {
+                        BoundarySample { light: x_light, d_dx: frame.homogeneous4(dx4), d_dy: frame.homogeneous4(dy4) }
+                    }
+                };
+                if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
+                    samples.counts.rejected_back_facing += 1;
+                    continue;
+                }
+                samples.boundary.push(sample);
+                samples.boundary_world.push(world);
+            }
+        }
+    }
+}
+
+/// A boundary pixel's surface: world tangents from a read-back normal, or
+/// homogeneous derivatives from depth differences.
+#[derive(Clone, Copy)]
+enum Surface {
+    Given { tx: DVec3, ty: DVec3, normal: DVec3 },
+    Depth { dx4: DVec4, dy4: DVec4, normal: DVec3 },
+}
+
+impl Surface {
+    fn normal(self) -> DVec3 {
+        match self {
+            Self::Given { normal, .. } | Self::Depth { normal, .. } => normal,
+        }
+    }
+}
+
+/// The surface at boundary pixel `(x, y)`; `None` at a depth discontinuity
+/// or where the derivatives are not finite.
+#[allow(clippy::too_many_arguments)]
+fn surface_at(
+    grid: &Grid,
+    world_from_screen: &glam::DMat4,
+    camera: &crate::Camera,
+    options: &SampleOptions,
+    (x, y): (usize, usize),
+    (sx, sy, d): (f64, f64, f64),
+    here: DVec4,
+    world: DVec3,
+    step: glam::DVec2,
+    depth_at: &impl Fn(usize, usize) -> Option<f64>,
+) -> Option<Surface> {
+    let (w, h) = (grid.width, grid.height);
+    // Depth slope along each screen axis (full-resolution units).
+    let slope = |dx: isize, dy: isize| -> Option<f64> {
+        let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
+        let (x1, y1) = (x + dx as usize, y + dy as usize);
+        if x1 >= w || y1 >= h {
+            return None;
+        }
+        let (d0, d1) = (depth_at(x0, y0)?, depth_at(x1, y1)?);
+        let first = 0.5 * (d1 - d0);
+        let second = d1 - 2.0 * d + d0;
+        (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
+            .then_some(first / if dx != 0 { step.x } else { step.y })
+    };
+    let normal_given = grid.normals().map(|normals| {
+        let [nx, ny, nz] = normals[y * w + x];
+        DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
+    });
+    match normal_given.and_then(DVec3::try_normalize) {
+        Some(normal) => {
+            // Derivatives of the surface point along the tangent plane.
+            let (tx, ty) = plane_derivatives(world_from_screen, sx, sy, world, normal)?;
+            Some(Surface::Given { tx, ty, normal })
+        }
+        None => {
+            let (zx, zy) = (slope(1, 0)?, slope(0, 1)?);
+            let dx4 = *world_from_screen * DVec4::new(1.0, 0.0, zx, 0.0);
+            let dy4 = *world_from_screen * DVec4::new(0.0, 1.0, zy, 0.0);
+            let (dx4, dy4) = if here.w < 0.0 { (-dx4, -dy4) } else { (dx4, dy4) };
+            // World tangents (derivative of the dehomogenised point).
+            let tx = (dx4.truncate() - world * dx4.w) / here.w;
+            let ty = (dy4.truncate() - world * dy4.w) / here.w;
+            let mut normal = tx.cross(ty).normalize_or_zero();
+            if normal.dot(camera.towards_viewer(world)) < 0.0 {
+                normal = -normal;
+            }
+            // Homogeneous point and its homogeneous derivatives: one scale.
+            Some(Surface::Depth { dx4, dy4, normal })
+        }
+    }
+}
+
+/// World-space derivatives, per full-resolution pixel along x and y, of the
+/// point where the pixel's ray meets the plane through `world` with `normal`.
+fn plane_derivatives(
+    world_from_screen: &glam::DMat4,
+    sx: f64,
+    sy: f64,
+    world: DVec3,
+    normal: DVec3,
+) -> Option<(DVec3, DVec3)> {
+    // Move one pixel along x (or y) and intersect that pixel's ray with the plane.
+    let hit = |px: f64, py: f64| -> Option<DVec3> {
+        let a = world_from_screen.project_point3(DVec3::new(px, py, 0.0));
+        // Depth 0.5, not 1: an infinite far plane's depth 1 is at infinity.
+        let b = world_from_screen.project_point3(DVec3::new(px, py, 0.5));
+        let denom = normal.dot(b - a);
+        if denom.abs() <= f64::EPSILON * (b - a).length() {
+            return None;
+        }
+        Some(a + (b - a) * (normal.dot(world - a) / denom))
+    };
+    let (xp, xm) = (hit(sx + 0.5, sy)?, hit(sx - 0.5, sy)?);
+    let (yp, ym) = (hit(sx, sy + 0.5)?, hit(sx, sy - 0.5)?);
+    Some((xp - xm, yp - ym)).filter(|(a, b)| a.is_finite() && b.is_finite())
+}
+
+/// Whether a receiver at `p` with unit normal `n` faces the light.
+pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) -> bool {
+    let to_light = match *light {
+        Light::Directional { direction } => -direction,
+        Light::Point { position } | Light::Spot { position, .. } => (position - p).normalize_or_zero(),
+    };
+    n.dot(to_light) > min_cosine
+}

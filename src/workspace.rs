@@ -1,0 +1,209 @@
+//! [`SolveWorkspace`]: the reusable buffers behind [`ShadowProblem::solve`],
+//! and a cache of what depends only on the camera and the scene bounds.
+//!
+//! Why: an engine solves every light's matrix every frame, with the same
+//! camera for all its lights and often the same camera from frame to frame.
+//! Each classical method builds a few convex bodies, clips them and fits a
+//! map; done with fresh buffers that was hundreds of allocations per solve,
+//! and the view frustum's planes and the visible receivers `V ∩ R` (the same
+//! for every point and directional light) were rebuilt per light. A
+//! workspace keeps the buffers (bodies, point lists, plane lists, the clip's
+//! and the fit's scratch) and the camera-only results; once warm, a solve
+//! allocates nothing.
+//!
+//! The cache is keyed by the camera's matrices, clip distances and the scene
+//! bounds compared bit for bit, and by the plane tolerance; on any change it
+//! is rebuilt. Cached and rebuilt results are the same computation on the
+//! same input, so the matrices are bit-identical to an uncached solve
+//! (`tests/optimize_workspace.rs` checks this over random and hard cases).
+//! Spot lights clip the receivers by their own frustum before the view
+//! frustum, so their visible receivers are not cached.
+
+use std::cell::Cell;
+
+use glam::{DMat4, DVec2, DVec3};
+
+use crate::camera::Camera;
+use crate::fit::FitWorkspace;
+use crate::geometry::{ClipWorkspace, ConvexPolyhedron, Plane};
+use crate::scene::SceneBounds;
+
+/// Reusable buffers for solving many [`ShadowProblem`](crate::ShadowProblem)s,
+/// with a cache of the camera-only bodies.
+///
+/// [`ShadowProblem::solve`](crate::ShadowProblem::solve) uses one per thread
+/// (kept in a thread-local); [`ShadowProblem::solve_with`](crate::ShadowProblem::solve_with)
+/// takes one explicitly. Once its buffers have grown to the largest problem
+/// solved, solving allocates nothing. Results never depend on what the
+/// workspace held before (see the [module docs](self)).
+#[derive(Clone, Debug)]
+pub struct SolveWorkspace {
+    pub(crate) clip: ClipWorkspace,
+    pub(crate) fit: FitWorkspace,
+    /// Light coordinates of the points a map is fitted around.
+    pub(crate) xs: Vec<DVec3>,
+    /// Their projections on the image plane.
+    pub(crate) image: Vec<DVec2>,
+    /// Unit directions for the enclosing cone.
+    pub(crate) units: Vec<DVec3>,
+    bodies: Vec<ConvexPolyhedron>,
+    points: Vec<Vec<DVec3>>,
+    planes: Vec<Vec<Plane>>,
+    pub(crate) view: ViewCache,
+}
+
+impl Default for SolveWorkspace {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SolveWorkspace {
+    /// An empty workspace with the camera cache on; buffers grow on first use.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::with_cache(true)
+    }
+
+    /// An empty workspace that recomputes the camera-only bodies on every
+    /// solve (for comparisons; the results are the same).
+    #[must_use]
+    pub fn uncached() -> Self {
+        Self::with_cache(false)
+    }
+
+    fn with_cache(enabled: bool) -> Self {
+        Self {
+            clip: ClipWorkspace::default(),
+            fit: FitWorkspace::default(),
+            xs: Vec::new(),
+            image: Vec::new(),
+            units: Vec::new(),
+            bodies: Vec::new(),
+            points: Vec::new(),
+            planes: Vec::new(),
+            view: ViewCache { enabled, ..ViewCache::default() },
+        }
+    }
+
+    /// A body from the pool (content unspecified); give it back with
+    /// [`put_body`](Self::put_body).
+    pub(crate) fn take_body(&mut self) -> ConvexPolyhedron {
+        self.bodies.pop().unwrap_or_default()
+    }
+
+    pub(crate) fn put_body(&mut self, body: ConvexPolyhedron) {
+        self.bodies.push(body);
+    }
+
+    /// An empty point list from the pool; give it back with
+    /// [`put_points`](Self::put_points).
+    pub(crate) fn take_points(&mut self) -> Vec<DVec3> {
+        let mut points = self.points.pop().unwrap_or_default();
+        points.clear();
+        points
+    }
+
+    pub(crate) fn put_points(&mut self, points: Vec<DVec3>) {
+        self.points.push(points);
+    }
+
+    /// An empty plane list from the pool; give it back with
+    /// [`put_planes`](Self::put_planes).
+    pub(crate) fn take_planes(&mut self) -> Vec<Plane> {
+        let mut planes = self.planes.pop().unwrap_or_default();
+        planes.clear();
+        planes
+    }
+
+    pub(crate) fn put_planes(&mut self, planes: Vec<Plane>) {
+        self.planes.push(planes);
+    }
+}
+
+/// The camera-only results of the last problem's camera and bounds.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ViewCache {
+    enabled: bool,
+    key: Option<ViewKey>,
+    /// The view frustum's planes (valid whenever `key` is set).
+    pub(crate) planes: Vec<Plane>,
+    /// `V ∩ R`, the visible receivers of a light without its own frustum.
+    pub(crate) visible: Option<ConvexPolyhedron>,
+    /// The view frustum as a body.
+    pub(crate) view_body: Option<ConvexPolyhedron>,
+    /// Retired bodies, kept for their buffers.
+    spare: Vec<ConvexPolyhedron>,
+}
+
+/// What the cached results depend on.
+#[derive(Clone, Copy, Debug)]
+struct ViewKey {
+    camera: Camera,
+    bounds: SceneBounds,
+    eps: f64,
+}
+
+impl ViewKey {
+    /// Equal cameras (every field) with bit-identical matrices, clip
+    /// distances and bounds, and the same tolerance bits.
+    fn same(&self, other: &Self) -> bool {
+        let mats = |c: &Camera| {
+            [c.view_from_world(), c.clip_from_view(), c.source_view_from_world(), c.source_clip_from_view()]
+        };
+        let mat_bits = |a: DMat4, b: DMat4| {
+            a.to_cols_array().iter().zip(b.to_cols_array().iter()).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        let bounds = |b: &SceneBounds| {
+            [b.casters.min, b.casters.max, b.receivers.min, b.receivers.max].map(|v| v.to_array().map(f64::to_bits))
+        };
+        self.camera == other.camera
+            && mats(&self.camera).into_iter().zip(mats(&other.camera)).all(|(a, b)| mat_bits(a, b))
+            && self.camera.z_near().to_bits() == other.camera.z_near().to_bits()
+            && self.camera.z_far().to_bits() == other.camera.z_far().to_bits()
+            && bounds(&self.bounds) == bounds(&other.bounds)
+            && self.eps.to_bits() == other.eps.to_bits()
+    }
+}
+
+impl ViewCache {
+    /// Makes the cache hold the results for this camera, bounds and
+    /// tolerance: keeps them when the key matches (and the cache is on),
+    /// otherwise drops them and recomputes the view planes with `planes`.
+    pub(crate) fn prepare(
+        &mut self,
+        camera: &Camera,
+        bounds: &SceneBounds,
+        eps: f64,
+        planes: impl FnOnce(&mut Vec<Plane>),
+    ) {
+        let key = ViewKey { camera: *camera, bounds: *bounds, eps };
+        if self.enabled && self.key.as_ref().is_some_and(|k| k.same(&key)) {
+            return;
+        }
+        self.key = Some(key);
+        planes(&mut self.planes);
+        self.spare.extend(self.visible.take());
+        self.spare.extend(self.view_body.take());
+    }
+
+    /// A body for a result about to be cached (buffers from a retired one).
+    pub(crate) fn spare_body(&mut self) -> ConvexPolyhedron {
+        self.spare.pop().unwrap_or_default()
+    }
+}
+
+thread_local! {
+    /// Boxed, so that lending it out moves a pointer, not the buffers' headers.
+    static WORKSPACE: Cell<Option<Box<SolveWorkspace>>> = const { Cell::new(None) };
+}
+
+/// Runs `f` with this thread's workspace. A nested call (the workspace is
+/// then out in use) or a call while the thread shuts down gets a fresh one.
+pub(crate) fn with_workspace<R>(f: impl FnOnce(&mut SolveWorkspace) -> R) -> R {
+    let mut workspace = WORKSPACE.try_with(Cell::take).ok().flatten().unwrap_or_default();
+    let result = f(&mut workspace);
+    // Fails only while the thread shuts down; the buffers are then dropped.
+    let _ = WORKSPACE.try_with(|cell| cell.set(Some(workspace)));
+    result
+}

@@ -1,0 +1,90 @@
+//! The solve workspace's camera cache changes no bit of any result: every
+//! classical method solved through one long-lived workspace (cache hits for
+//! the lights sharing a camera, misses when the camera or bounds change)
+//! equals the same solve through a fresh uncached workspace and through
+//! `ShadowProblem::solve`, matrices and errors alike, over random cameras
+//! with hard lights: inside the receivers, far away, grazing a flat floor,
+//! along and against the view direction, spot lights (never cached).
+
+use glam::DVec3;
+use lixel::{Aabb, Light, Parameterization, SceneBounds, ShadowProblem, SolveWorkspace};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+mod common;
+
+/// Bit-exact comparison: `Debug` prints every `f64` so that it reads back to
+/// the same bits (and `-0.0` as such); errors compare by variant and data.
+fn bits<T: std::fmt::Debug>(value: &T) -> String {
+    format!("{value:?}")
+}
+
+/// Hard lights for a camera and bounds.
+fn lights(config: &common::Config, rng: &mut ChaCha8Rng) -> Vec<Light> {
+    let r = config.bounds.receivers;
+    let scale = config.bounds.scene().diagonal().max(1e-3);
+    let inside = r.min + (r.max - r.min) * DVec3::new(rng.random(), rng.random(), rng.random());
+    let view = (config.target - config.eye).normalize();
+    let horizontal =
+        DVec3::new(rng.random_range(-1.0..1.0), 0.0, rng.random_range(-1.0..1.0)).try_normalize().unwrap_or(DVec3::X);
+    let far = r.center() + DVec3::new(0.3, 1.0, -0.2).normalize() * scale * 10f64.powf(rng.random_range(3.0..8.0));
+    vec![
+        config.light,
+        Light::point(inside),
+        Light::point(far),
+        Light::directional(view),
+        Light::directional(-view),
+        Light::directional(-horizontal + DVec3::Y * -1e-9),
+        Light::point(r.center().with_y(r.min.y) + horizontal * scale * 3.0),
+        Light::point(config.eye - view * scale * 0.5),
+        Light::spot(inside, DVec3::NEG_Y + horizontal * 0.2, 50f64.to_radians()),
+        Light::spot(far, r.center() - far, 20f64.to_radians()),
+    ]
+}
+
+#[test]
+fn cached_solves_are_bit_identical_to_uncached() {
+    let cases = (common::cases() / 20).max(20);
+    let mut shared = SolveWorkspace::new();
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    let (mut compared, mut errors) = (0, 0);
+    for i in 0..cases {
+        let config = if i % 2 == 0 { common::config(1515, i) } else { common::hard_config(1515, i).0 };
+        let Some(camera) = config.camera() else { continue };
+        // The same camera with the receivers flattened to their floor
+        // (grazing lights; the cache must notice the bounds changed), then
+        // the original bounds once more.
+        let flat = SceneBounds {
+            receivers: Aabb {
+                max: config.bounds.receivers.max.with_y(config.bounds.receivers.min.y),
+                ..config.bounds.receivers
+            },
+            ..config.bounds
+        };
+        let lights = lights(&config, &mut rng);
+        let problems: Vec<ShadowProblem> = [config.bounds, flat]
+            .iter()
+            .flat_map(|&bounds| lights.iter().map(move |&light| (light, bounds)))
+            .chain([(lights[0], config.bounds)])
+            .filter_map(|(light, bounds)| ShadowProblem::new(camera, light, bounds, config.map).ok())
+            .collect();
+        for parameterization in Parameterization::ALL_DEFAULT {
+            for problem in &problems {
+                let cached = problem.solve_with(&parameterization, &mut shared);
+                let uncached = problem.solve_with(&parameterization, &mut SolveWorkspace::uncached());
+                assert_eq!(bits(&cached), bits(&uncached), "case {i}, {parameterization:?}, {:?}", problem.light());
+                assert_eq!(bits(&problem.solve(&parameterization)), bits(&uncached), "case {i} (thread-local)");
+                compared += 1;
+                errors += usize::from(uncached.is_err());
+            }
+        }
+        // The public bodies agree too.
+        for problem in &problems {
+            let visible = problem.visible_receiver_body();
+            let direct = problem.receiver_body().clip_all(problem.view_planes().iter(), problem.eps());
+            assert_eq!(visible, direct, "case {i}: visible receivers");
+        }
+    }
+    eprintln!("{compared} solves compared, {errors} of them errors");
+    assert!(compared > cases * 60, "too few solves compared: {compared}");
+}
