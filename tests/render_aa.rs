@@ -235,3 +235,23 @@ fn overflowing_lists_keep_the_standard_bit() {
     }
     assert!(changed > 0 && changed <= stats.overflow_pixels as usize, "{changed} changed, {stats:?}");
 }
+
+/// Two lights in one frame give each light the words it gets alone (the
+/// passes run per light with their own parameters and output range).
+#[test]
+fn lights_in_one_frame_match_lights_alone() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let cam = camera(48);
+    let both = matrices(&scene, &cam, &test_lights(), 96, &Parameterization::Focused);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, &both) }).unwrap();
+    let together: Vec<Vec<u32>> = (0..2).map(|i| renderer.read_occlusion(i).unwrap()).collect();
+    let stats: Vec<_> = (0..2).map(|i| renderer.read_aa_stats(i).unwrap()).collect();
+    for (i, m) in both.iter().enumerate() {
+        renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, std::slice::from_ref(m)) }).unwrap();
+        assert_eq!(renderer.read_occlusion(0).unwrap(), together[i], "light {i}");
+        assert_eq!(renderer.read_aa_stats(0).unwrap(), stats[i], "light {i}");
+        assert!(stats[i].exact_pixels > 0, "light {i}: {:?}", stats[i]);
+    }
+}
