@@ -11,7 +11,7 @@
 // 2. `sat_rows`, `sat_cols`: the inclusive summed-area table of the mask.
 // 3. `tile_count`, `tile_scan`, `tile_write`: triangle lists of TILE x TILE
 //    texel tiles. A tile is *active* when its neighbourhood (the tile grown
-//    by TILE texels each side) holds a silhouette texel; a triangle enters
+//    by two tiles each side) holds a silhouette texel; a triangle enters
 //    the list of every active tile its projected bounding box touches.
 // 4. `visibility`: one invocation per pixel: the pixel's facet (tangent plane
 //    from the camera pass's depth and normal), its light-space footprint;
@@ -21,7 +21,7 @@
 
 const TILE: u32 = 8u;
 // Footprints touching more tiles than this take the standard bit (counted).
-const MAX_FOOTPRINT_TILES: u32 = 16u;
+const MAX_FOOTPRINT_TILES: u32 = 36u;
 const ALL_SAMPLES: u32 = 0xffffffffu;
 // Half-plane table (bitmask.rs): 128 directions x 64 offsets over +-0.625 px.
 const ANGLES: f32 = 128.0;
@@ -250,7 +250,7 @@ fn rect_sum(lo_in: vec2<i32>, hi_in: vec2<i32>) -> u32 {
 
 fn tile_active(tile: vec2<i32>) -> bool {
     let t = i32(TILE);
-    return rect_sum(tile * t - vec2<i32>(t), tile * t + vec2<i32>(2 * t - 1)) > 0u;
+    return rect_sum(tile * t - vec2<i32>(2 * t), tile * t + vec2<i32>(3 * t - 1)) > 0u;
 }
 
 fn vertex(t: u32, k: u32) -> vec3<f32> {

@@ -97,7 +97,7 @@ fn silhouette_mask_and_summed_area_match_the_cpu_reference() {
 
 /// The pair count (triangle-tile list entries) equals a CPU count: each
 /// triangle's projected bounding box grown by a texel, its tiles of 8x8
-/// texels whose neighbourhood (grown by 8 texels) holds a silhouette texel
+/// texels whose neighbourhood (grown by 16 texels) holds a silhouette texel
 /// of the GPU's own mask. f32 against f64 box corners may move a box edge
 /// across a tile border, so within 1%.
 #[test]
@@ -114,8 +114,8 @@ fn pair_count_matches_a_cpu_count() {
     let stats = renderer.read_aa_stats(0).unwrap();
     let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
     let active = |tx: i64, ty: i64| {
-        let (x0, y0) = ((tx * 8 - 8).max(0), (ty * 8 - 8).max(0));
-        let (x1, y1) = ((tx * 8 + 15).min(w - 1), (ty * 8 + 15).min(h - 1));
+        let (x0, y0) = ((tx * 8 - 16).max(0), (ty * 8 - 16).max(0));
+        let (x1, y1) = ((tx * 8 + 23).min(w - 1), (ty * 8 + 23).min(h - 1));
         (y0..=y1).any(|y| (x0..=x1).any(|x| mask[(y * w + x) as usize] != 0))
     };
     let mut expected = 0u64;

@@ -16,7 +16,7 @@
 //! [`PAIR_CAPACITY`] entries per light; a pixel whose footprint touches a
 //! tile whose list did not fit keeps the standard bit in every sample and
 //! is counted in [`AaStats::overflow_pixels`]. A footprint touching more
-//! than 16 tiles, or a tile without silhouette texels nearby (footprints
+//! than 36 tiles, or a tile without silhouette texels nearby (footprints
 //! wider than a tile), does the same, counted in [`AaStats::wide_pixels`].
 //!
 //! [`ShadowLookup::SubPixelAa`]: super::super::ShadowLookup::SubPixelAa
