@@ -99,7 +99,7 @@ struct ExperimentArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     map: Option<u32>,
     /// Comma-separated methods: normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized, optimized-argmin,
-    /// each optionally with a lookup suffix, e.g. focused+spsm (sub-pixel shadow maps).
+    /// each optionally with a lookup suffix, e.g. focused+spsm (sub-pixel shadow maps), focused+sgsm (sub-geometry shadow maps).
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Ground truth.
@@ -108,7 +108,7 @@ struct ExperimentArgs {
     /// Configurations for the resolution equivalence (0 turns it off).
     #[arg(long)]
     equivalence: Option<usize>,
-    /// Comma-separated shadow lookups (standard, spsm, ...): every method runs once with each,
+    /// Comma-separated shadow lookups (standard, spsm, sgsm): every method runs once with each,
     /// e.g. `--lookup standard,spsm` (default: each method's lookup as named in --methods).
     #[arg(long, value_delimiter = ',', value_parser = parse_lookup)]
     lookup: Option<Vec<ShadowLookup>>,

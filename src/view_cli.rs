@@ -19,7 +19,7 @@ pub(crate) struct ViewArgs {
     scene: SceneFileArgs,
     /// Method of every light: normal, focused, focused-snapped, lispsm, psm,
     /// plane-optimal, optimized, optimized-argmin (keys 1-8 in the window),
-    /// each also with `+spsm`.
+    /// each also with `+spsm` or `+sgsm`.
     #[arg(long, default_value = "optimized")]
     method: String,
     /// Number of lights (the experiment's first configurations).

@@ -44,16 +44,18 @@ impl Renderer {
             if clip != wanted {
                 counts.unclipped_unavailable += 1;
             }
-            let timestamp_writes = self
-                .timer
-                .as_ref()
-                .zip(timer)
-                .and_then(|(t, q)| t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last));
+            let timestamp_writes = self.timer.as_ref().zip(timer).and_then(|(t, q)| {
+                // With SGSM the sweep ends the shadow stage.
+                t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last && state.sweep.is_none())
+            });
             // A mode's colour layer starts cleared (zero words) like the depth.
+            let sgsm_layer = state.maps.sgsm.as_ref().and_then(|s| s.normal_layers.get(i));
             let color_attachments: Vec<_> = state
                 .maps
                 .color_layers
                 .get(i)
+                .into_iter()
+                .chain(sgsm_layer)
                 .map(|view| wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
@@ -63,7 +65,6 @@ impl Renderer {
                         store: wgpu::StoreOp::Store,
                     },
                 })
-                .into_iter()
                 .map(Some)
                 .collect();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -87,6 +88,12 @@ impl Renderer {
             } else {
                 self.draw_scene(&mut pass, &m.clip_from_world, clip)
             };
+        }
+        // SGSM: the sweep reads the finished maps.
+        if let (Some(sweep), Some(maps)) = (&state.sweep, &state.maps.sgsm) {
+            let sizes: Vec<_> = slots.iter().map(|m| (m.map_size.width, m.map_size.height)).collect();
+            let writes = self.timer.as_ref().zip(timer).map(|(t, _)| t.compute_end_writes(timing::Stage::Shadow));
+            sweep.encode(&self.queue, encoder, maps, &sizes, writes);
         }
         counts
     }

@@ -14,6 +14,8 @@
 use std::borrow::Cow;
 
 use super::passes::{AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SHADOW_SLOTS};
+use super::sgsm::gpu::{SgsmMaps, SweepPass};
+use super::sgsm::{self, SgsmOptions};
 use super::spsm::{self, SpsmOptions};
 use super::subpixel::AaSamples;
 use super::uniforms::{ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
@@ -32,6 +34,12 @@ pub enum ShadowLookup {
     /// (`shaders/spsm_pass.wgsl`), looked up with the triangles' planes and
     /// the paper's silhouette recovery (`shaders/spsm_lookup.wgsl`).
     Spsm(SpsmOptions),
+    /// Sub-geometry shadow maps (see [`sgsm`](super::sgsm)): SPSM's maps
+    /// plus each triangle's slopes, a compute sweep recognising the
+    /// triangles at each texel's four corners, and a lookup on the plane
+    /// of the one containing the point (`shaders/sgsm_lookup.wgsl`), SPSM's
+    /// lookup where the pattern is not recognised.
+    Sgsm(SgsmOptions),
     /// Sub-pixel antialiased shadows (Pan et al. 2009; see
     /// [`subpixel`](super::subpixel)): the depth compare's maps and shadow
     /// bit, plus compute passes after the camera pass that give every pixel
@@ -41,10 +49,12 @@ pub enum ShadowLookup {
 }
 
 impl ShadowLookup {
-    /// Every lookup mode (SPSM with its default options).
-    pub const ALL: [ShadowLookup; 5] = [
+    /// Every lookup mode (SPSM and SGSM with their default options, the
+    /// antialiased lookup with each sample count).
+    pub const ALL: [ShadowLookup; 6] = [
         ShadowLookup::DepthCompare,
         ShadowLookup::Spsm(SpsmOptions::PAPER),
+        ShadowLookup::Sgsm(SgsmOptions::PAPER),
         ShadowLookup::SubPixelAa(AaSamples::X8),
         ShadowLookup::SubPixelAa(AaSamples::X16),
         ShadowLookup::SubPixelAa(AaSamples::X32),
@@ -56,6 +66,7 @@ impl ShadowLookup {
         match self {
             Self::DepthCompare => "depth-compare",
             Self::Spsm(_) => "spsm",
+            Self::Sgsm(_) => "sgsm",
             Self::SubPixelAa(AaSamples::X8) => "aa8",
             Self::SubPixelAa(AaSamples::X16) => "aa16",
             Self::SubPixelAa(AaSamples::X32) => "aa32",
@@ -79,12 +90,21 @@ impl ShadowLookup {
                 shadow_wgsl: Cow::Borrowed(include_str!("../../shaders/shadow.wgsl")),
                 lookup_wgsl: Cow::Borrowed(include_str!("../../shaders/lookup_depth_compare.wgsl")),
                 pulls_vertices: false,
+                sgsm: None,
             },
             Self::Spsm(options) => LookupSpec {
                 map_color: Some(spsm::TEXEL_FORMAT),
                 shadow_wgsl: Cow::Owned(spsm::pass_source(&options)),
                 lookup_wgsl: Cow::Owned(spsm::lookup_source(&options)),
                 pulls_vertices: true,
+                sgsm: None,
+            },
+            Self::Sgsm(options) => LookupSpec {
+                map_color: Some(spsm::TEXEL_FORMAT),
+                shadow_wgsl: Cow::Owned(sgsm::pass_source(&options)),
+                lookup_wgsl: Cow::Owned(sgsm::lookup_source(&options)),
+                pulls_vertices: true,
+                sgsm: Some(options),
             },
         }
     }
@@ -110,6 +130,10 @@ struct LookupSpec {
     /// group 0 bindings 1 and 2, non-indexed draws whose `vertex_index` is
     /// the index slot, no face culling (conservative rasterization).
     pulls_vertices: bool,
+    /// SGSM: a second shadow-pass target (the slopes), the sweep after the
+    /// shadow passes, its mask array at group 1 binding 2 and, when
+    /// counting, the path counters at binding 3.
+    sgsm: Option<SgsmOptions>,
 }
 
 /// Whether a shadow pass clips depth at the light's near and far planes.
@@ -132,6 +156,8 @@ pub(crate) struct LookupState {
     pub(crate) maps: ShadowMaps,
     /// See [`LookupSpec::pulls_vertices`].
     pub(crate) pulls_vertices: bool,
+    /// The SGSM sweep (and counters), for that mode.
+    pub(crate) sweep: Option<SweepPass>,
 }
 
 impl LookupState {
@@ -149,6 +175,22 @@ impl LookupState {
         if let Some(format) = spec.map_color {
             let sample_type = format.sample_type(None, None).unwrap_or(wgpu::TextureSampleType::Uint);
             entries.push(map_entry(1, sample_type));
+        }
+        let sweep = spec.sgsm.map(|options| SweepPass::new(device, &options));
+        if let Some(sweep) = &sweep {
+            entries.push(map_entry(2, wgpu::TextureSampleType::Uint));
+            if sweep.counters.is_some() {
+                entries.push(wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                });
+            }
         }
         let maps_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(&format!("lixel {} maps layout", lookup.name())),
@@ -186,15 +228,17 @@ impl LookupState {
                 device,
                 &shadow_module,
                 spec.map_color,
+                sweep.is_some(),
                 unclipped_available,
                 spec.pulls_vertices.then_some(scene),
             ),
             camera: CameraPass::new(device, &layouts.camera, &maps_layout, &camera_module),
             analysis: AnalysisPass::new(device, &layouts.analysis, &maps_layout, &analysis_module),
-            maps: ShadowMaps::new(device, &maps_layout, spec.map_color, 1, 1, 1),
+            maps: ShadowMaps::new(device, &maps_layout, spec.map_color, sweep.as_ref(), 1, 1, 1),
             maps_layout,
             map_color: spec.map_color,
             pulls_vertices: spec.pulls_vertices,
+            sweep,
         }
     }
 
@@ -206,6 +250,7 @@ impl LookupState {
                 device,
                 &self.maps_layout,
                 self.map_color,
+                self.sweep.as_ref(),
                 width.max(maps.width),
                 height.max(maps.height),
                 layers.max(maps.layers()),
@@ -244,6 +289,7 @@ impl ShadowPass {
         device: &wgpu::Device,
         module: &wgpu::ShaderModule,
         map_color: Option<wgpu::TextureFormat>,
+        sgsm_slopes: bool,
         unclipped_available: bool,
         pulled: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
@@ -305,8 +351,12 @@ impl ShadowPass {
         let vertex_buffers = [Some(VertexRaw::position_layout())];
         let vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>] =
             if pulled.is_some() { &[] } else { &vertex_buffers };
-        let targets = [map_color.map(wgpu::ColorTargetState::from)];
-        let targets: &[Option<wgpu::ColorTargetState>] = if map_color.is_some() { &targets } else { &[] };
+        let targets = [map_color.map(wgpu::ColorTargetState::from), Some(sgsm::gpu::NORMAL_FORMAT.into())];
+        let targets: &[Option<wgpu::ColorTargetState>] = match (map_color.is_some(), sgsm_slopes) {
+            (true, true) => &targets,
+            (true, false) => &targets[..1],
+            (false, _) => &[],
+        };
         let pipelines = std::array::from_fn(|k| {
             let (cull, unclipped) = (k / 2, k % 2 == 1);
             let cull_mode = [None, Some(wgpu::Face::Front), Some(wgpu::Face::Back)][cull];
@@ -379,6 +429,8 @@ pub(crate) struct ShadowMaps {
     pub(crate) color: Option<wgpu::Texture>,
     pub(crate) depth_layers: Vec<wgpu::TextureView>,
     pub(crate) color_layers: Vec<wgpu::TextureView>,
+    /// SGSM's slopes and masks.
+    pub(crate) sgsm: Option<SgsmMaps>,
     pub(crate) bind_group: wgpu::BindGroup,
     pub(crate) width: u32,
     pub(crate) height: u32,
@@ -389,6 +441,7 @@ impl ShadowMaps {
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
         color: Option<wgpu::TextureFormat>,
+        sweep: Option<&SweepPass>,
         width: u32,
         height: u32,
         layers: u32,
@@ -434,6 +487,16 @@ impl ShadowMaps {
         if let Some((_, view, _)) = &color {
             entries.push(wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) });
         }
+        let sgsm = sweep.zip(color.as_ref()).map(|(s, (_, view, _))| s.maps(device, view, width, height, layers));
+        if let Some(maps) = &sgsm {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(&maps.masks_view),
+            });
+        }
+        if let Some(counters) = sweep.and_then(|s| s.counters.as_ref()) {
+            entries.push(wgpu::BindGroupEntry { binding: 3, resource: counters.as_entire_binding() });
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lixel shadow maps bind group"),
             layout,
@@ -443,7 +506,7 @@ impl ShadowMaps {
             Some((texture, _, layers)) => (Some(texture), layers),
             None => (None, Vec::new()),
         };
-        Self { depth_array, color, depth_layers, color_layers, bind_group, width, height }
+        Self { depth_array, color, depth_layers, color_layers, sgsm, bind_group, width, height }
     }
 
     pub(crate) fn layers(&self) -> u32 {

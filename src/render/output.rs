@@ -127,7 +127,7 @@ impl Renderer {
 
     /// Copies the top-left `width x height` texels of one layer into a
     /// buffer and waits for it. Returns tightly packed rows.
-    fn read_texture(
+    pub(super) fn read_texture(
         &self,
         texture: &wgpu::Texture,
         aspect: wgpu::TextureAspect,

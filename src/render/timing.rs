@@ -90,6 +90,16 @@ impl GpuTimer {
         .filter(|_| first || last)
     }
 
+    /// Timestamp writes of a compute pass that ends `stage` (the SGSM sweep
+    /// ends the shadow stage).
+    pub(crate) fn compute_end_writes(&self, stage: Stage) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: None,
+            end_of_pass_write_index: Some(2 * stage as u32 + 1),
+        }
+    }
+
     /// Resolves the queries and copies them into the frame's slot.
     pub(crate) fn resolve(&self, encoder: &mut wgpu::CommandEncoder, frame: &FrameQueries) {
         encoder.resolve_query_set(&self.queries, 0..QUERIES, &self.resolve, 0);

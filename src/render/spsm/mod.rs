@@ -103,6 +103,11 @@ fn constants(options: &SpsmOptions) -> String {
     )
 }
 
+/// The constants and `spsm_common.wgsl` (also for the SGSM shaders).
+pub(crate) fn common_source(options: &SpsmOptions) -> String {
+    constants(options) + include_str!("../../../shaders/spsm_common.wgsl")
+}
+
 /// The mode's shadow-pass WGSL (after `light_depth.wgsl`).
 pub(crate) fn pass_source(options: &SpsmOptions) -> String {
     constants(options)
