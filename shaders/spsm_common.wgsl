@@ -119,54 +119,70 @@ fn spsm_box_overlaps(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>) 
     return true;
 }
 
-// Distance of `p` inside clip plane k of the box [lo, hi] (>= 0: inside).
-fn spsm_plane_distance(k: u32, p: vec2<f32>, lo: vec2<f32>, hi: vec2<f32>) -> f32 {
-    switch k {
-        case 0u: { return p.x - lo.x; }
-        case 1u: { return hi.x - p.x; }
-        case 2u: { return p.y - lo.y; }
-        default: { return hi.y - p.y; }
-    }
-}
-
 // The paper's consistent minimum depth (section 4): the smallest depth of
 // the triangle's plane (zeta_c at `c`, gradient `g`) over the part of the
-// texel box at `c` the triangle covers. The triangle is clipped to the box
-// (Sutherland-Hodgman, at most 7 vertices) and the affine depth is minimal
-// at a vertex of the clipped polygon. Returns `fallback` when nothing is left.
+// texel box at `c` the triangle covers. That part is convex and the depth
+// affine, so the minimum is at one of its vertices: a box corner inside the
+// triangle, or an end of a triangle edge clipped to the box (Liang-Barsky;
+// this covers the triangle's vertices inside the box and the edges'
+// crossings of the box). Session 3: replaces a Sutherland-Hodgman clip
+// whose dynamically indexed polygon arrays were slow on llvmpipe; same
+// set of candidate points. Returns `fallback` when nothing is left.
 fn spsm_min_depth(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>, zeta_c: f32, g: vec2<f32>, fallback: f32) -> f32 {
-    var poly = array<vec2<f32>, 9>(t0, t1, t2, vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0));
-    var n = 3u;
     let lo = c - 0.5;
     let hi = c + 0.5;
-    for (var k = 0u; k < 4u; k++) {
-        var next: array<vec2<f32>, 9>;
-        var m = 0u;
-        for (var i = 0u; i < n; i++) {
-            let p = poly[i];
-            let q = poly[(i + 1u) % n];
-            let dp = spsm_plane_distance(k, p, lo, hi);
-            let dq = spsm_plane_distance(k, q, lo, hi);
-            if dp >= 0.0 && m < 9u {
-                next[m] = p;
-                m++;
-            }
-            if (dp >= 0.0) != (dq >= 0.0) && m < 9u {
-                next[m] = mix(p, q, dp / (dp - dq));
-                m++;
+    var best = 3.0e38;
+    // The corner where the plane is lowest over the whole box: when the
+    // triangle covers it, it is the answer (every interior texel).
+    let low_corner = c - 0.5 * sign(g);
+    let orient = spsm_cross(t1 - t0, t2 - t0);
+    let inside_low = orient != 0.0 && spsm_cross(t1 - t0, low_corner - t0) * orient >= 0.0
+        && spsm_cross(t2 - t1, low_corner - t1) * orient >= 0.0 && spsm_cross(t0 - t2, low_corner - t2) * orient >= 0.0;
+    if inside_low {
+        return zeta_c + dot(g, low_corner - c);
+    }
+    if orient != 0.0 {
+        for (var k = 0u; k < 4u; k++) {
+            let q = vec2<f32>(select(lo.x, hi.x, (k & 1u) != 0u), select(lo.y, hi.y, (k & 2u) != 0u));
+            if spsm_cross(t1 - t0, q - t0) * orient >= 0.0 && spsm_cross(t2 - t1, q - t1) * orient >= 0.0
+                && spsm_cross(t0 - t2, q - t2) * orient >= 0.0 {
+                best = min(best, zeta_c + dot(g, q - c));
             }
         }
-        poly = next;
-        n = m;
     }
-    if n == 0u {
-        return fallback;
+    best = min(best, spsm_clipped_edge_min(t0, t1, lo, hi, c, zeta_c, g));
+    best = min(best, spsm_clipped_edge_min(t1, t2, lo, hi, c, zeta_c, g));
+    best = min(best, spsm_clipped_edge_min(t2, t0, lo, hi, c, zeta_c, g));
+    return select(fallback, best, best < 3.0e38);
+}
+
+// The plane's smallest depth over segment a -> b clipped to the box [lo, hi]
+// (3e38 when the segment misses it).
+fn spsm_clipped_edge_min(a: vec2<f32>, b: vec2<f32>, lo: vec2<f32>, hi: vec2<f32>, c: vec2<f32>, zeta_c: f32, g: vec2<f32>) -> f32 {
+    let d = b - a;
+    var t_in = 0.0;
+    var t_out = 1.0;
+    for (var axis = 0u; axis < 2u; axis++) {
+        let da = d[axis];
+        let pa = a[axis];
+        if da == 0.0 {
+            if pa < lo[axis] || pa > hi[axis] {
+                return 3.0e38;
+            }
+        } else {
+            let t0 = (lo[axis] - pa) / da;
+            let t1 = (hi[axis] - pa) / da;
+            t_in = max(t_in, min(t0, t1));
+            t_out = min(t_out, max(t0, t1));
+        }
     }
-    var best = 3.0e38;
-    for (var i = 0u; i < n; i++) {
-        best = min(best, zeta_c + dot(g, poly[i] - c));
+    if t_in > t_out {
+        return 3.0e38;
     }
-    return best;
+    // Clamp the ends into the box against rounding.
+    let p = clamp(a + t_in * d, lo, hi);
+    let q = clamp(a + t_out * d, lo, hi);
+    return min(zeta_c + dot(g, p - c), zeta_c + dot(g, q - c));
 }
 
 // One decoded texel.
@@ -188,6 +204,14 @@ struct SpsmTexel {
 }
 
 fn spsm_decode(words: vec4<u32>, texel: vec2<i32>, map_size: vec2<f32>) -> SpsmTexel {
+    return spsm_with_slopes(spsm_decode_shape(words, texel), words, map_size);
+}
+
+// The texel without its derivatives (`gradient` and `gradient_error` stay
+// zero): the kind, centre depth and vertices, all a lookup needs from most
+// of its 3x3 neighbours (session 3: decoding every neighbour's slopes, six
+// pow and six tan each, was a good part of the lookup's cost).
+fn spsm_decode_shape(words: vec4<u32>, texel: vec2<i32>) -> SpsmTexel {
     var out: SpsmTexel;
     out.centre = vec2<f32>(texel) + 0.5;
     out.depth = spsm_decode_depth(words.w >> 16u);
@@ -199,6 +223,15 @@ fn spsm_decode(words: vec4<u32>, texel: vec2<i32>, map_size: vec2<f32>) -> SpsmT
     out.v0 = out.centre + unpack2x16float(words.x);
     out.v1 = out.centre + unpack2x16float(words.y);
     out.v2 = out.centre + unpack2x16float(words.z);
+    return out;
+}
+
+// `t` (from spsm_decode_shape of the same words) with its derivatives.
+fn spsm_with_slopes(t: SpsmTexel, words: vec4<u32>, map_size: vec2<f32>) -> SpsmTexel {
+    var out = t;
+    if t.kind != 0u {
+        return out;
+    }
     let qx = ((words.w >> 8u) & 0xffu) - 1u;
     let qy = (words.w & 0xffu) - 1u;
     out.gradient = vec2<f32>(spsm_decode_slope(f32(qx)), spsm_decode_slope(f32(qy))) / map_size;

@@ -25,31 +25,55 @@
 // packing's own error bound on the extrapolated plane.
 
 // Group 1 is the mode's maps (src/render/lookup.rs): binding 0 the depth
-// array (the consistent minimum depth, unused here), binding 1 the texels.
+// array (the consistent minimum depth, squeezed by spsm_depth_key in
+// spsm_pass.wgsl; bound as unfilterable float), binding 1 the texels.
+@group(1) @binding(0) var spsm_depths: texture_2d_array<f32>;
 @group(1) @binding(1) var spsm_texels: texture_2d_array<u32>;
 
-fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
+// The consistent minimum depth the pass stored for texel `k` (inside the
+// map): the inverse of spsm_depth_key, exact to f32 (no packing error).
+fn spsm_min_depth_at(light: Light, k: vec2<i32>) -> f32 {
+    let s = 2.0 * textureLoad(spsm_depths, k, light.layer, 0).x - 1.0;
+    return s / max(1.0 - abs(s), 1e-30);
+}
+
+// The texel at `k` without its derivatives (spsm_decode_shape); outside
+// the map an empty texel.
+fn spsm_load_shape(light: Light, k: vec2<i32>) -> SpsmTexel {
     if any(k < vec2<i32>(0)) || any(k >= vec2<i32>(light.map_size)) {
         var t: SpsmTexel;
         t.kind = 2u;
         t.centre = vec2<f32>(k) + 0.5;
         return t;
     }
-    return spsm_decode(textureLoad(spsm_texels, k, light.layer, 0), k, light.map_size);
+    return spsm_decode_shape(textureLoad(spsm_texels, k, light.layer, 0), k);
+}
+
+// `t`, loaded from texel `k` by spsm_load_shape, with its derivatives.
+fn spsm_slopes(light: Light, t: SpsmTexel, k: vec2<i32>) -> SpsmTexel {
+    if t.kind != 0u {
+        return t;
+    }
+    return spsm_with_slopes(t, textureLoad(spsm_texels, k, light.layer, 0), light.map_size);
+}
+
+// The whole texel at `k` (also used by sgsm_lookup.wgsl).
+fn spsm_load(light: Light, k: vec2<i32>) -> SpsmTexel {
+    return spsm_slopes(light, spsm_load_shape(light, k), k);
 }
 
 // Consistent depth test of a whole texel: its triangle's minimum depth over
-// the part of the texel it covers is in front of p.
-fn spsm_texel_blocks(t: SpsmTexel, zeta: f32) -> bool {
+// the part of the texel it covers (read from the depth array, as the pass
+// computed it from the unpacked triangle; session 3: it was recomputed here
+// from the packed one, nine polygon clips per lookup) is in front of p.
+// `slack` is added to the bias: with SPSM_TOLERANCE, half the own texel's
+// derivative quantization step (before session 3 each neighbour's own,
+// decoded for all nine; the own texel's keeps the figures and the cost down).
+fn spsm_texel_blocks(light: Light, t: SpsmTexel, k: vec2<i32>, zeta: f32, slack: f32) -> bool {
     if t.kind == 2u {
         return false;
     }
-    if t.kind == 1u {
-        return t.depth < zeta - SPSM_BIAS;
-    }
-    let lowest = spsm_min_depth(t.v0, t.v1, t.v2, t.centre, t.depth, t.gradient, 3.0e38);
-    let tolerance = SPSM_TOLERANCE * 0.5 * (t.gradient_error.x + t.gradient_error.y);
-    return lowest < zeta - SPSM_BIAS - tolerance;
+    return spsm_min_depth_at(light, k) < zeta - SPSM_BIAS - select(0.0, slack, t.kind == 0u);
 }
 
 // Outward unit normal of edge a -> b of a triangle with orientation `orient`.
@@ -130,56 +154,75 @@ fn spsm_silhouette(pattern: u32) -> vec3<f32> {
     return vec3<f32>(-sin(theta), cos(theta), 1.0);
 }
 
+// The nearest boundary vertex on each side of p along the tangent so far:
+// (t, d) on the left (t <= 0) and right (t >= 0), and whether found.
+struct SpsmSideState {
+    left: vec2<f32>,
+    right: vec2<f32>,
+    found: vec2<bool>,
+}
+
+// Vertex `v` (between `prev` and `next` of a triangle with orientation
+// `orient`) offered to the side state: kept when it faces `n`, lies within
+// two texels of p along the tangent and is nearer than the side's current
+// one (near-ties go to the vertex further towards the free side).
+fn spsm_side_vertex(s: SpsmSideState, prev: vec2<f32>, v: vec2<f32>, next: vec2<f32>, orient: f32, p: vec2<f32>, n: vec2<f32>) -> SpsmSideState {
+    var out = s;
+    let normal = spsm_edge_normal(prev, v, orient) + spsm_edge_normal(v, next, orient);
+    if orient != 0.0 && dot(normal, n) <= 0.0 {
+        return out;
+    }
+    let q = v - p;
+    let tv = dot(q, vec2<f32>(-n.y, n.x));
+    let dv = dot(q, n);
+    if abs(tv) > 2.0 {
+        return out;
+    }
+    if tv <= 0.0 && (tv > out.left.x + 0.01 || (tv > out.left.x - 0.01 && dv > out.left.y)) {
+        out.left = vec2<f32>(tv, dv);
+        out.found.x = true;
+    }
+    if tv >= 0.0 && (tv < out.right.x - 0.01 || (tv < out.right.x + 0.01 && dv > out.right.y)) {
+        out.right = vec2<f32>(tv, dv);
+        out.found.y = true;
+    }
+    return out;
+}
+
 // One silhouette side: the occluders' boundary vertices facing `n` (the
 // free side) within two texels along the tangent are projected on it, and
 // the piecewise-linear phi through the nearest one on each side of p
 // decides: 1 shadowed when phi(t(p)) reaches past p towards `n`, 0 lit,
-// 2 when no boundary vertex was found.
-fn spsm_side(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>, n: vec2<f32>) -> u32 {
-    let tangent = vec2<f32>(-n.y, n.x);
-    // Nearest boundary vertex on each side of p along the tangent: (t, d).
-    var left = vec2<f32>(-1e30, 0.0);
-    var right = vec2<f32>(1e30, 0.0);
-    var found = vec2<bool>(false, false);
+// 2 when no boundary vertex was found. The blocked texels of the 3x3
+// around `k` are loaded again here (session 3: a private array of the nine
+// decoded texels, dynamically indexed, made the lookup several times
+// slower on llvmpipe).
+fn spsm_side(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>, n: vec2<f32>) -> u32 {
+    var s: SpsmSideState;
+    s.left = vec2<f32>(-1e30, 0.0);
+    s.right = vec2<f32>(1e30, 0.0);
+    s.found = vec2<bool>(false, false);
     for (var i = 0u; i < 9u; i++) {
-        let t = texels[i];
-        if (pattern & (1u << i)) == 0u || t.kind != 0u {
+        if (pattern & (1u << i)) == 0u {
             continue;
         }
-        var v = array<vec2<f32>, 3>(t.v0, t.v1, t.v2);
-        let orient = sign(spsm_cross(t.v1 - t.v0, t.v2 - t.v0));
-        for (var k = 0u; k < 3u; k++) {
-            let prev = v[(k + 2u) % 3u];
-            let next = v[(k + 1u) % 3u];
-            let normal = spsm_edge_normal(prev, v[k], orient) + spsm_edge_normal(v[k], next, orient);
-            if orient != 0.0 && dot(normal, n) <= 0.0 {
-                continue;
-            }
-            let q = v[k] - p;
-            let tv = dot(q, tangent);
-            let dv = dot(q, n);
-            if abs(tv) > 2.0 {
-                continue;
-            }
-            // Nearest in t; near-ties go to the vertex further towards the free side.
-            if tv <= 0.0 && (tv > left.x + 0.01 || (tv > left.x - 0.01 && dv > left.y)) {
-                left = vec2<f32>(tv, dv);
-                found.x = true;
-            }
-            if tv >= 0.0 && (tv < right.x - 0.01 || (tv < right.x + 0.01 && dv > right.y)) {
-                right = vec2<f32>(tv, dv);
-                found.y = true;
-            }
+        let t = spsm_load_shape(light, k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1));
+        if t.kind != 0u {
+            continue;
         }
+        let orient = sign(spsm_cross(t.v1 - t.v0, t.v2 - t.v0));
+        s = spsm_side_vertex(s, t.v2, t.v0, t.v1, orient, p, n);
+        s = spsm_side_vertex(s, t.v0, t.v1, t.v2, orient, p, n);
+        s = spsm_side_vertex(s, t.v1, t.v2, t.v0, orient, p, n);
     }
     var phi: f32;
-    if found.x && found.y {
-        let span = right.x - left.x;
-        phi = select(max(left.y, right.y), mix(left.y, right.y, -left.x / span), span > 1e-6);
-    } else if found.x {
-        phi = left.y;
-    } else if found.y {
-        phi = right.y;
+    if s.found.x && s.found.y {
+        let span = s.right.x - s.left.x;
+        phi = select(max(s.left.y, s.right.y), mix(s.left.y, s.right.y, -s.left.x / span), span > 1e-6);
+    } else if s.found.x {
+        phi = s.left.y;
+    } else if s.found.y {
+        phi = s.right.y;
     } else {
         return 2u;
     }
@@ -187,7 +230,7 @@ fn spsm_side(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>, n: vec2<f3
     return select(0u, 1u, phi >= 0.0);
 }
 
-fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool {
+fn spsm_recover(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>) -> bool {
     if pattern == 0u {
         return false;
     }
@@ -200,19 +243,23 @@ fn spsm_recover(texels: array<SpsmTexel, 9>, pattern: u32, p: vec2<f32>) -> bool
         // One tangent only: no direction, the own texel's depth test.
         return centre;
     }
-    var normals = array<vec2<f32>, 4>(estimate.xy, -estimate.xy, vec2<f32>(0.0), vec2<f32>(0.0));
     var count = 1u;
     if estimate.z == 1.0 {
         count = 2u;
     } else if estimate.z == 2.0 {
-        normals = array<vec2<f32>, 4>(vec2<f32>(1.0, 0.0), vec2<f32>(-1.0, 0.0), vec2<f32>(0.0, 1.0), vec2<f32>(0.0, -1.0));
         count = 4u;
     }
     // Several tangent estimates: shadowed only where every one says so (the
     // paper's intersection); a side without boundary vertices defers to the
-    // own texel's consistent depth test.
+    // own texel's consistent depth test. Estimate j: the normal, its
+    // opposite (a thin band), or the four axis directions (a blob).
     for (var j = 0u; j < count; j++) {
-        let side = spsm_side(texels, pattern, p, normals[j]);
+        var n = select(estimate.xy, -estimate.xy, j == 1u);
+        if estimate.z == 2.0 {
+            let sign_j = select(1.0, -1.0, (j & 1u) != 0u);
+            n = select(vec2<f32>(sign_j, 0.0), vec2<f32>(0.0, sign_j), j >= 2u);
+        }
+        let side = spsm_side(light, k, pattern, p, n);
         if side == 0u || (side == 2u && !centre) {
             return false;
         }
@@ -250,28 +297,28 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     // Without SPSM_THIN (i16's rules): any neighbour's stored surface through
     // p means lit, and no own-plane rule.
     let own_clear = !SPSM_THIN || own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
-    var texels: array<SpsmTexel, 9>;
+    let pattern_slack = SPSM_TOLERANCE * 0.5 * (own.gradient_error.x + own.gradient_error.y);
     var pattern = 0u;
     var on_surface = SPSM_THIN && own_clear && own_plane.x <= zeta + own_slack;
     for (var i = 0u; i < 9u; i++) {
         var t = own;
+        let ki = k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1);
         if i != 4u {
-            t = spsm_load(light, k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1));
+            t = spsm_load_shape(light, ki);
             if t.kind == 0u && spsm_inside(t, p) {
-                let plane = spsm_plane_at(t, p);
+                let plane = spsm_plane_at(spsm_slopes(light, t, ki), p);
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {
                     return true;
                 }
                 on_surface = on_surface || own_clear;
             }
         }
-        if spsm_texel_blocks(t, zeta) {
+        if spsm_texel_blocks(light, t, ki, zeta, pattern_slack) {
             pattern |= 1u << i;
         }
-        texels[i] = t;
     }
     if on_surface {
         return false;
     }
-    return spsm_recover(texels, pattern, p);
+    return spsm_recover(light, k, pattern, p);
 }

@@ -10,8 +10,9 @@
 // plus a 1/64-texel margin against the rasterizer's snapping. The three
 // offset lines meet in the expanded triangle. A sliver's expanded triangle
 // can be huge (vertex distance ~ offset / sin(angle / 2)); then a right
-// triangle around its half-texel-padded bounding box, whichever is smaller,
-// is drawn instead. The fragment stage discards texels whose box does not
+// triangle around its half-texel-padded bounding box (axis-aligned or
+// aligned with its longest edge), whichever is smallest, is drawn instead.
+// The fragment stage discards texels whose box does not
 // meet the true triangle (exact separating-axis test), so the covered
 // texels are exactly those the triangle touches.
 //
@@ -94,12 +95,46 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     let lo = min(t[0], min(t[1], t[2])) - margin;
     let hi = max(t[0], max(t[1], t[2])) + margin;
     let span = (hi - lo) * 2.01;
-    let box_area = 0.5 * span.x * span.y;
+    var box_area = 0.5 * span.x * span.y;
     var box_corner = lo;
     if corner == 1u {
         box_corner = lo + vec2<f32>(span.x, 0.0);
     } else if corner == 2u {
         box_corner = lo + vec2<f32>(0.0, span.y);
+    }
+    // The same around the box aligned with the longest edge (u along it, v
+    // across), padded by the texel box's support: a long diagonal sliver's
+    // axis-aligned box grows with its length squared, this one linearly
+    // (issue 16, session 3: such slivers made SPSM frames ~100x a standard
+    // one in the timing harness).
+    let e = array<vec2<f32>, 3>(t[1] - t[0], t[2] - t[1], t[0] - t[2]);
+    let l = vec3<f32>(dot(e[0], e[0]), dot(e[1], e[1]), dot(e[2], e[2]));
+    var longest = e[0];
+    if l.y >= l.x && l.y >= l.z {
+        longest = e[1];
+    } else if l.z >= l.x && l.z >= l.y {
+        longest = e[2];
+    }
+    if dot(longest, longest) > 0.0 {
+        let u = normalize(longest);
+        let v = vec2<f32>(-u.y, u.x);
+        let pad = margin * (abs(u.x) + abs(u.y));
+        let tu = vec3<f32>(dot(t[0], u), dot(t[1], u), dot(t[2], u));
+        let tv = vec3<f32>(dot(t[0], v), dot(t[1], v), dot(t[2], v));
+        let lo_uv = vec2<f32>(min(tu.x, min(tu.y, tu.z)), min(tv.x, min(tv.y, tv.z))) - pad;
+        let hi_uv = vec2<f32>(max(tu.x, max(tu.y, tu.z)), max(tv.x, max(tv.y, tv.z))) + pad;
+        let span_uv = (hi_uv - lo_uv) * 2.01;
+        let area_uv = 0.5 * span_uv.x * span_uv.y;
+        if area_uv < box_area {
+            box_area = area_uv;
+            let o = lo_uv.x * u + lo_uv.y * v;
+            box_corner = o;
+            if corner == 1u {
+                box_corner = o + span_uv.x * u;
+            } else if corner == 2u {
+                box_corner = o + span_uv.y * v;
+            }
+        }
     }
 
     // Edge k runs t[k] -> t[k + 1]; its outward normal and offset line.

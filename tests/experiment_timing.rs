@@ -13,7 +13,7 @@ use lixel::experiment::{self, ExperimentConfig, Preset, RatioEstimate, TimingOpt
 fn timing_runs_every_pipeline_in_paired_rounds() {
     let Some((device, queue)) = render_common::gpu() else { return };
     let config = ExperimentConfig { screen: 96, ..ExperimentConfig::preset(Preset::Quick) };
-    let options = TimingOptions { lights: vec![1, 3], maps: vec![128], frames: 30, ..TimingOptions::default() };
+    let options = TimingOptions { lights: vec![1, 2], maps: vec![128], frames: 30, ..TimingOptions::default() };
     let mut seen = 0;
     let rows = experiment::run_timing(&config, &options, &device, &queue, |_| seen += 1).unwrap();
     assert_eq!((rows.len(), seen), (2, 2));
@@ -32,18 +32,22 @@ fn timing_runs_every_pipeline_in_paired_rounds() {
         assert!(stages[0].optimize.is_zero() && !stages[2].optimize.is_zero());
         assert!(stages.iter().all(|s| s.shadow.is_none()), "GPU stages are off by default");
         assert!(row.optimized_ratio() > 0.0 && row.optimized_ratio().is_finite());
+        // The SPSM pipeline (focused maps, sub-pixel lookup) pairs with focused too.
+        assert!(row.spsm_ratio() > 0.0 && row.spsm_ratio().is_finite(), "{row:?}");
+        assert!(RatioEstimate::from_ratios(&row.round_ratios(4)).is_some());
         let estimate = RatioEstimate::from_ratios(&row.round_ratios(2)).unwrap();
         assert!(estimate.interval[0] <= estimate.ratio && estimate.ratio <= estimate.interval[1]);
     }
     let md = experiment::timing_markdown(&rows);
-    assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 3 | 128²")).count(), 2 + 8);
+    assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 2 | 128²")).count(), 2 + 10);
+    assert!(md.contains("(focused + SPSM) / focused: cells median"));
     assert!(md.contains("scene-optimized / focused: cells median"));
     assert!(md.contains("over 4 paired rounds"));
     assert!(!md.contains("GPU shadow"), "no GPU columns without GPU stages");
 
     // With timestamps (where the device has them) the breakdown gets GPU stages.
     if device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
-        let options = TimingOptions { lights: vec![2], gpu_stages: true, ..options };
+        let options = TimingOptions { lights: vec![1], gpu_stages: true, ..options };
         let rows = experiment::run_timing(&config, &options, &device, &queue, |_| {}).unwrap();
         for stage in &rows[0].stages {
             assert!(stage.gpu_frames > 0 && stage.shadow.is_some() && stage.camera.is_some(), "{stage:?}");

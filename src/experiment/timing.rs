@@ -3,9 +3,11 @@
 //! run so that the ratios are comparable; plus "focused + analysis" (focused
 //! maps shown while the analysis passes, readbacks and optimizations run and
 //! are thrown away), which isolates the machinery's own cost from what the
-//! optimized maps' shapes do to the shadow and camera passes.
+//! optimized maps' shapes do to the shadow and camera passes; and "focused +
+//! SPSM" (focused maps with the sub-pixel shadow-map lookup, issue 16: its
+//! conservative shadow pass and its lookup), paired against focused.
 //!
-//! The four pipelines are interleaved in blocks of whole optimizer cadences
+//! The five pipelines are interleaved in blocks of whole optimizer cadences
 //! (15 frames: five analysis passes, each light looked up once in a focused
 //! map), the order rotating from round to round, so that drift in the
 //! machine's speed reaches all of them alike. A block is timed from an idle
@@ -17,7 +19,9 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 
 use super::{camera_for, light_for, load_scene, ExperimentConfig, ExperimentError};
-use crate::render::{GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop};
+use crate::render::{
+    GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLookup, ShadowLoop, SpsmOptions,
+};
 use crate::{Camera, Light, Parameterization, SceneBounds, ShadowMapSize};
 
 /// What to time.
@@ -75,10 +79,13 @@ pub struct TimingRow {
     /// used: the machinery's own cost, apart from what the optimized maps'
     /// shapes do to the shadow and camera passes.
     pub focused_with_analysis: Duration,
+    /// Mean frame time of focused maps with the SPSM lookup
+    /// ([`ShadowLookup::Spsm`](crate::render::ShadowLookup::Spsm)).
+    pub focused_spsm: Duration,
     /// Wall time of every timed block, per pipeline in the order of
     /// [`PIPELINES`]; block `k` of every pipeline belongs to round `k` (the
     /// same frames of the walk, timed back to back), so they pair up.
-    pub blocks: [Vec<Duration>; 4],
+    pub blocks: [Vec<Duration>; 5],
     /// Timed rounds.
     pub rounds: usize,
     /// Optimizations run during the timed frames.
@@ -87,14 +94,13 @@ pub struct TimingRow {
     pub analyses: usize,
     /// Mean process CPU time per frame (all threads, lavapipe's included),
     /// per pipeline in the order of [`PIPELINES`]; `None` off Linux.
-    pub cpu: [Option<Duration>; 4],
-    /// Where each pipeline's frame time went, in the order focused, LiSPSM,
-    /// scene-optimized, focused + analysis ([`PIPELINES`]).
-    pub stages: [StageTimes; 4],
+    pub cpu: [Option<Duration>; 5],
+    /// Where each pipeline's frame time went, in the order of [`PIPELINES`].
+    pub stages: [StageTimes; 5],
 }
 
 /// The pipelines of a [`TimingRow`], in the order of [`TimingRow::stages`].
-pub const PIPELINES: [&str; 4] = ["focused", "LiSPSM", "scene-optimized", "focused + analysis"];
+pub const PIPELINES: [&str; 5] = ["focused", "LiSPSM", "scene-optimized", "focused + analysis", "focused + SPSM"];
 
 /// Mean cost per frame of one pipeline's stages over the timed frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -165,8 +171,8 @@ impl StageSums {
 impl TimingRow {
     /// Mean frame time per pipeline, in the order of [`PIPELINES`].
     #[must_use]
-    pub fn frame_times(&self) -> [Duration; 4] {
-        [self.focused, self.lispsm, self.optimized, self.focused_with_analysis]
+    pub fn frame_times(&self) -> [Duration; 5] {
+        [self.focused, self.lispsm, self.optimized, self.focused_with_analysis, self.focused_spsm]
     }
 
     /// Mean frame time of pipeline `k` ([`PIPELINES`]) over focused's.
@@ -199,6 +205,12 @@ impl TimingRow {
     pub fn analysis_ratio(&self) -> f64 {
         self.ratio(3)
     }
+
+    /// Mean (focused + SPSM) / focused frame time.
+    #[must_use]
+    pub fn spsm_ratio(&self) -> f64 {
+        self.ratio(4)
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -208,6 +220,8 @@ enum Pipeline {
     Optimized,
     /// Focused maps shown; analysis and optimization run but are discarded.
     FocusedWithAnalysis,
+    /// Focused maps with the SPSM lookup.
+    FocusedSpsm,
 }
 
 impl Pipeline {
@@ -218,6 +232,17 @@ impl Pipeline {
             Self::LiSpsm => LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())),
             Self::Optimized => LoopPolicy::Optimized,
             Self::FocusedWithAnalysis => LoopPolicy::FixedWithAnalysis(Parameterization::Focused),
+            Self::FocusedSpsm => LoopPolicy::Fixed(Parameterization::Focused),
+        }
+    }
+
+    /// The frame loop's settings (the lookup) for this pipeline.
+    fn options(self) -> LoopOptions {
+        match self {
+            Self::FocusedSpsm => {
+                LoopOptions { lookup: ShadowLookup::Spsm(SpsmOptions::default()), ..Default::default() }
+            }
+            _ => LoopOptions::default(),
         }
     }
 }
@@ -261,7 +286,7 @@ struct Run {
 impl Run {
     fn new(pipeline: Pipeline, lights: usize) -> Result<Self, ExperimentError> {
         Ok(Self {
-            shadows: ShadowLoop::new(pipeline.policy(), lights, LoopOptions::default())?,
+            shadows: ShadowLoop::new(pipeline.policy(), lights, pipeline.options())?,
             optimizations: 0,
             analyses: 0,
             timed: Vec::new(),
@@ -402,10 +427,16 @@ pub fn run_timing(
         for &count in &options.lights {
             let lights: Vec<Light> = (0..count).map(|i| light_for(config, &scene, i)).collect();
             let cell = Cell { base, lights: &lights, bounds: scene.bounds(), map: ShadowMapSize::square(map) };
-            let mut runs = [Pipeline::Focused, Pipeline::LiSpsm, Pipeline::Optimized, Pipeline::FocusedWithAnalysis]
-                .map(|p| Run::new(p, count))
-                .into_iter()
-                .collect::<Result<Vec<_>, _>>()?;
+            let mut runs = [
+                Pipeline::Focused,
+                Pipeline::LiSpsm,
+                Pipeline::Optimized,
+                Pipeline::FocusedWithAnalysis,
+                Pipeline::FocusedSpsm,
+            ]
+            .map(|p| Run::new(p, count))
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()?;
             for run in &mut runs {
                 for _ in 0..options.warmup_blocks {
                     run.block(&mut renderer, &cell, block, false)?;
@@ -427,12 +458,13 @@ pub fn run_timing(
                 lispsm: mean(&runs[1]),
                 optimized: mean(&runs[2]),
                 focused_with_analysis: mean(&runs[3]),
-                blocks: [0, 1, 2, 3].map(|k| runs[k].timed.clone()),
+                focused_spsm: mean(&runs[4]),
+                blocks: [0, 1, 2, 3, 4].map(|k| runs[k].timed.clone()),
                 rounds,
                 optimizations: runs[2].optimizations,
                 analyses: runs[2].analyses,
-                stages: [0, 1, 2, 3].map(|k| runs[k].sums.means()),
-                cpu: [0, 1, 2, 3].map(|k| mean_cpu(&runs[k])),
+                stages: [0, 1, 2, 3, 4].map(|k| runs[k].sums.means()),
+                cpu: [0, 1, 2, 3, 4].map(|k| mean_cpu(&runs[k])),
             };
             progress(&row);
             rows.push(row);
@@ -448,21 +480,24 @@ pub fn run_timing(
 #[must_use]
 pub fn timing_markdown(rows: &[TimingRow]) -> String {
     let mut md = String::from(
-        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | focused + analysis ms | LiSPSM / focused | optimized / focused | optimized / focused, paired rounds (95% CI) | (focused + analysis) / focused | CPU time optimized / focused | analyses | optimizations |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|\n",
+        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | focused + analysis ms | focused + SPSM ms | LiSPSM / focused | optimized / focused | optimized / focused, paired rounds (95% CI) | (focused + analysis) / focused | SPSM / focused, paired rounds (95% CI) | CPU time optimized / focused | analyses | optimizations |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---:|---:|---:|\n",
     );
     for r in rows {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
-        let paired = RatioEstimate::from_ratios(&r.round_ratios(2)).map_or_else(|| "-".to_owned(), |e| e.to_string());
+        let paired =
+            |k| RatioEstimate::from_ratios(&r.round_ratios(k)).map_or_else(|| "-".to_owned(), |e| e.to_string());
+        let (paired, spsm) = (paired(2), paired(4));
         let cpu = r.optimized_cpu_ratio().map_or_else(|| "-".to_owned(), |c| format!("{c:.3}"));
         md.push_str(&format!(
-            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {paired} | {:.3} | {cpu} | {} | {} |\n",
+            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {paired} | {:.3} | {spsm} | {cpu} | {} | {} |\n",
             r.lights,
             r.map,
             ms(r.focused),
             ms(r.lispsm),
             ms(r.optimized),
             ms(r.focused_with_analysis),
+            ms(r.focused_spsm),
             r.ratio(1),
             r.optimized_ratio(),
             r.analysis_ratio(),
@@ -477,8 +512,12 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
         "\nOver all cells (per-cell ratios of mean frame times: median and largest; every paired round of every \
          cell: geometric mean with its 95% confidence interval):\n\n",
     );
-    for (k, what) in [(2, "scene-optimized / focused"), (3, "(focused + analysis) / focused"), (1, "LiSPSM / focused")]
-    {
+    for (k, what) in [
+        (2, "scene-optimized / focused"),
+        (3, "(focused + analysis) / focused"),
+        (1, "LiSPSM / focused"),
+        (4, "(focused + SPSM) / focused"),
+    ] {
         let mut cells: Vec<f64> = rows.iter().map(|r| r.ratio(k)).collect();
         let largest = cells.iter().copied().fold(0.0f64, f64::max);
         let all: Vec<f64> = rows.iter().flat_map(|r| r.round_ratios(k)).collect();

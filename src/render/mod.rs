@@ -660,6 +660,16 @@ impl Renderer {
     /// Light intensity is split so that n lights add up to 1.
     fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
+        // The SPSM pass and lookup (SGSM builds on both) compare in a depth of their own (see
+        // spsm::depth_matrix).
+        let spsm = matches!(frame.lookup, ShadowLookup::Spsm(_) | ShadowLookup::Sgsm(_));
+        let for_lookup = |m: &LightMatrix| {
+            if spsm {
+                LightMatrix { clip_from_world: spsm::depth_matrix(m), ..*m }
+            } else {
+                *m
+            }
+        };
         let raw_lights = |lights: &[LightMatrix], layer: &dyn Fn(usize) -> u32| -> Vec<LightRaw> {
             let color = light_color(lights.len());
             let range = |i: usize| self.depth_ranges.get(i).copied().flatten();
@@ -667,7 +677,7 @@ impl Renderer {
                 .iter()
                 .enumerate()
                 .map(|(i, m)| {
-                    let raw = LightRaw::to_raw(m, layer(i), color);
+                    let raw = LightRaw::to_raw(&for_lookup(m), layer(i), color);
                     range(i).map_or(raw, |r| raw.with_depth_range(r))
                 })
                 .collect()
@@ -700,7 +710,7 @@ impl Renderer {
             self.queue.write_buffer(&self.analysis_lights, 0, bytemuck::bytes_of(&lights));
         }
         let shadow_raw: Vec<ShadowPassRaw> =
-            slots.maps.iter().map(|m| ShadowPassRaw::to_raw(m, &self.options.bias)).collect();
+            slots.maps.iter().map(|m| ShadowPassRaw::to_raw(&for_lookup(m), &self.options.bias)).collect();
         if !shadow_raw.is_empty() {
             let state = &self.lookups[slots.lookup];
             self.queue.write_buffer(&state.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));

@@ -121,3 +121,59 @@ pub(crate) fn lookup_source(options: &SpsmOptions) -> String {
         + include_str!("../../../shaders/spsm_common.wgsl")
         + include_str!("../../../shaders/spsm_lookup.wgsl")
 }
+
+/// The matrix the SPSM pass and lookup work with: `matrix` itself, except
+/// for a point or spot light whose near plane was clamped
+/// ([`LightMatrix::needs_unclipped_depth`](crate::LightMatrix::needs_unclipped_depth)),
+/// where the depth row is rebuilt with a near plane of its own.
+///
+/// Why (issue 16, session 3): SPSM compares in `zeta = z / w = a + b / w`.
+/// A scene-optimized warp can put a caster-body point at a grazing angle to
+/// the optical axis `j`, so that the smallest `w = j·X` over the depth
+/// points is tiny and the solver clamps `near` to `far · 1e-4`. Then every
+/// receiver lands within ~1e-3 of `zeta = 1`, caster and receiver differ by
+/// ~1e-5 there (below the 16-bit centre-depth step and the constant bias),
+/// and the lookup misses the shadow (quick preset, configuration 1:
+/// `optimized+spsm` 3445 of 3441 shadowed pixels false-lit). The standard
+/// lookup stores linear light distance and is immune.
+///
+/// Every point the map holds lies within the matrix's
+/// [`light_distance`](crate::LightMatrix::light_distance) of the light and
+/// inside the map, whose rays make at most the angle of its farthest
+/// corner with `j`; so `w >= light_distance.min · cos(that angle)` there.
+/// That bound (when larger than the clamped `near`) is the SPSM near plane:
+/// `zeta` stays affine in `1 / w` (planar on triangles), monotone along
+/// rays, and receivers spread over `[0, 1]` again. Anything nearer (not a
+/// caster of the map's receivers) gets `zeta < 0`, which the pass and the
+/// lookup order correctly.
+#[must_use]
+pub fn depth_matrix(matrix: &crate::LightMatrix) -> glam::DMat4 {
+    use glam::{DVec4, Vec4Swizzles};
+    let m = matrix.clip_from_world;
+    let (crate::DepthRange::Perspective { near, far }, Some(position)) = (matrix.depth, matrix.light.position()) else {
+        return m;
+    };
+    if !matrix.needs_unclipped_depth {
+        return m;
+    }
+    let w_row = m.row(3);
+    let world_from_clip = m.inverse();
+    let mut cos_min = f64::INFINITY;
+    for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+        let p = world_from_clip * DVec4::new(x, y, 0.5, 1.0);
+        if !(p.w.abs() > 0.0) {
+            return m;
+        }
+        let p = p.xyz() / p.w;
+        let r = (p - position).length();
+        cos_min = cos_min.min(w_row.dot(p.extend(1.0)) / r);
+    }
+    let w_lo = matrix.light_distance.min * cos_min;
+    if !(w_lo.is_finite() && w_lo > near && w_lo < far) {
+        return m;
+    }
+    let a = far / (far - w_lo);
+    let b = -w_lo * far / (far - w_lo);
+    let z_row = w_row * a + DVec4::W * b;
+    glam::DMat4::from_cols(m.row(0), m.row(1), z_row, w_row).transpose()
+}
