@@ -675,8 +675,32 @@ impl<'a> Runner<'a> {
             let result = match self.matrix(method, &problem, nearest) {
                 Ok((m, frames, note)) => {
                     let masks = self.masks_with(&m, method.lookup())?;
-                    let visibility =
-                        coverage.as_ref().zip(samples).map(|(c, s)| VisibilityError::of_masks(&masks, &truth, c, s));
+                    // `+aaN`: the renderer's occlusion words against the truth
+                    // of the same N sub-samples; others: the shadow bit.
+                    let visibility = match (coverage.as_ref(), samples, method.lookup()) {
+                        (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
+                            Some(VisibilityError::of_occlusion(&self.renderer.read_occlusion(0)?, &truth, c, n))
+                        }
+                        (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
+                        _ => None,
+                    };
+                    // The antialiased passes' counts go to the note (pair-list
+                    // use and the pixels that kept the standard bit).
+                    let note = match method.lookup() {
+                        ShadowLookup::SubPixelAa(_) => {
+                            let s = self.renderer.read_aa_stats(0)?;
+                            let aa = format!(
+                                "aa pairs {} exact {} overflow {} wide {}",
+                                s.pairs, s.exact_pixels, s.overflow_pixels, s.wide_pixels
+                            );
+                            if note.is_empty() {
+                                aa
+                            } else {
+                                format!("{note}; {aa}")
+                            }
+                        }
+                        _ => note,
+                    };
                     MethodResult {
                         matrix: Some(m),
                         counts: Some(Counts::compare(&masks, &truth)),

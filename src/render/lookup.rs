@@ -17,6 +17,7 @@ use super::passes::{AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SH
 use super::sgsm::gpu::{SgsmMaps, SweepPass};
 use super::sgsm::{self, SgsmOptions};
 use super::spsm::{self, SpsmOptions};
+use super::subpixel::AaSamples;
 use super::uniforms::{ShadowPassRaw, VertexRaw, SHADOW_SLOT_STRIDE};
 
 /// How the camera and analysis passes look a point up in a light's map.
@@ -39,12 +40,25 @@ pub enum ShadowLookup {
     /// of the one containing the point (`shaders/sgsm_lookup.wgsl`), SPSM's
     /// lookup where the pattern is not recognised.
     Sgsm(SgsmOptions),
+    /// Sub-pixel antialiased shadows (Pan et al. 2009; see
+    /// [`subpixel`](super::subpixel)): the depth compare's maps and shadow
+    /// bit, plus compute passes after the camera pass that give every pixel
+    /// an occlusion word over the pattern's sub-samples
+    /// ([`Renderer::read_occlusion`](super::Renderer::read_occlusion)).
+    SubPixelAa(AaSamples),
 }
 
 impl ShadowLookup {
-    /// Every lookup mode (SPSM and SGSM with their default options).
-    pub const ALL: [ShadowLookup; 3] =
-        [ShadowLookup::DepthCompare, ShadowLookup::Spsm(SpsmOptions::PAPER), ShadowLookup::Sgsm(SgsmOptions::PAPER)];
+    /// Every lookup mode (SPSM and SGSM with their default options, the
+    /// antialiased lookup with each sample count).
+    pub const ALL: [ShadowLookup; 6] = [
+        ShadowLookup::DepthCompare,
+        ShadowLookup::Spsm(SpsmOptions::PAPER),
+        ShadowLookup::Sgsm(SgsmOptions::PAPER),
+        ShadowLookup::SubPixelAa(AaSamples::X8),
+        ShadowLookup::SubPixelAa(AaSamples::X16),
+        ShadowLookup::SubPixelAa(AaSamples::X32),
+    ];
 
     /// A short stable name (for file names, CSV and logs).
     #[must_use]
@@ -53,6 +67,9 @@ impl ShadowLookup {
             Self::DepthCompare => "depth-compare",
             Self::Spsm(_) => "spsm",
             Self::Sgsm(_) => "sgsm",
+            Self::SubPixelAa(AaSamples::X8) => "aa8",
+            Self::SubPixelAa(AaSamples::X16) => "aa16",
+            Self::SubPixelAa(AaSamples::X32) => "aa32",
         }
     }
 
@@ -66,7 +83,9 @@ impl ShadowLookup {
     /// The three parts a mode provides.
     fn spec(self) -> LookupSpec {
         match self {
-            Self::DepthCompare => LookupSpec {
+            // The antialiased mode's bit is the depth compare's; its
+            // sub-pixel work runs after the camera pass (subpixel::gpu).
+            Self::DepthCompare | Self::SubPixelAa(_) => LookupSpec {
                 map_color: None,
                 shadow_wgsl: Cow::Borrowed(include_str!("../../shaders/shadow.wgsl")),
                 lookup_wgsl: Cow::Borrowed(include_str!("../../shaders/lookup_depth_compare.wgsl")),

@@ -298,6 +298,10 @@ pub struct Renderer {
     /// Light `i` is a cascade when `cascades[i]` is set
     /// ([`Renderer::set_cascades`]).
     cascades: Vec<Option<CascadeSlot>>,
+    /// The antialiased lookup's passes, built on its first frame (from the
+    /// scene buffers read back) with blocker bias `aa_bias` (world units).
+    aa: Option<subpixel::gpu::AaPass>,
+    aa_bias: f32,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -363,17 +367,25 @@ impl Renderer {
             }));
             indices.extend(object.mesh.indices.iter().map(|i| i + base));
         }
+        let aa_bias = (1e-4
+            * scene
+                .objects
+                .iter()
+                .filter_map(|o| o.mesh.bounds())
+                .reduce(|a, b| a.union(&b))
+                .map_or(1.0, |b| b.diagonal())) as f32;
         let gpu_scene = device::capture(device, "scene upload", || GpuScene {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
-                // Storage: the SPSM pass pulls whole triangles.
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+                // Storage: the SPSM pass pulls whole triangles; copy: the
+                // antialiased lookup reads the positions back once.
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             }),
             indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene indices"),
                 contents: bytemuck::cast_slice(&indices),
-                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             }),
             index_count: indices.len() as u32,
             objects,
@@ -439,6 +451,8 @@ impl Renderer {
             last_lights: Vec::new(),
             last_lookup: None,
             cascades: Vec::new(),
+            aa: None,
+            aa_bias,
             options,
             errors,
             depth_copy: std::sync::OnceLock::new(),
@@ -570,8 +584,13 @@ impl Renderer {
         let analysis_staging = frame.analysis.and_then(|_| self.ring.acquire().map(|(slot, b)| (slot, b.clone())));
         let state = &self.lookups[slots.lookup];
         let shadow = self.encode_shadow_passes(&mut encoder, state, &slots.maps, timer.as_ref());
-        // The depth analysis reads the camera pass's masks.
+        // The depth analysis and the antialiased passes read the camera pass's masks.
+        let aa = match frame.lookup {
+            ShadowLookup::SubPixelAa(samples) => Some(samples),
+            _ => None,
+        };
         let camera_output = if frame.masks
+            || aa.is_some()
             || (analysis_staging.is_some() && self.options.analysis_source == AnalysisSource::CameraDepth)
         {
             CameraOutput::ColorAndMasks
@@ -580,6 +599,19 @@ impl Renderer {
         };
         let camera_triangles =
             self.encode_camera_pass(&mut encoder, state, frame.camera, camera_output, timer.as_ref());
+        if let (Some(samples), Some(pass), Some(targets)) = (aa, self.aa.as_mut(), self.camera_targets.as_ref()) {
+            pass.encode(
+                &self.device,
+                &self.queue,
+                &mut encoder,
+                (&self.camera_uniforms, &self.camera_bindings.lights),
+                (&self.scene.vertices, &self.scene.indices, self.scene.index_count / 3),
+                &targets.masks.view,
+                (targets.width, targets.height),
+                frame.lights,
+                samples,
+            );
+        }
         if let Some((_, buffer)) = &analysis_staging {
             self.encode_analysis_pass(&mut encoder, state, frame.camera, buffer, timer.as_ref());
         }
@@ -641,6 +673,9 @@ impl Renderer {
         }
         debug_assert!(maps.len() <= MAX_SHADOW_SLOTS);
         let lookup = self.lookup_state(frame.lookup)?;
+        if matches!(frame.lookup, ShadowLookup::SubPixelAa(_)) {
+            self.ensure_aa()?;
+        }
         self.ensure_resources(lookup, &maps, viewport.x, viewport.y);
         Ok(MapSlots { maps, analysis_layers, lookup })
     }

@@ -16,6 +16,7 @@
 
 pub mod bitmask;
 pub mod facet;
+pub mod gpu;
 pub mod reference;
 
 use glam::DVec2;

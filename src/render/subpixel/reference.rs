@@ -53,6 +53,11 @@ impl EdgeAdjacency {
         Self { edges }
     }
 
+    /// Every edge: its two end points and the triangles holding it.
+    pub fn edges(&self) -> impl Iterator<Item = ([Vec3; 2], &[u32])> {
+        self.edges.iter().map(|(e, tris)| (*e, tris.as_slice()))
+    }
+
     /// Number of distinct edges.
     #[must_use]
     pub fn len(&self) -> usize {

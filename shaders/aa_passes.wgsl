@@ -1,0 +1,579 @@
+// Sub-pixel antialiased shadows (Pan et al. 2009), `ShadowLookup::SubPixelAa`:
+// compute passes after the camera pass, run once per light (`params.light`).
+// Prepended: light_depth.wgsl, common.wgsl (group 0: `camera`, `lights`) and
+// a stub `in_shadow` (common.wgsl's `shade` needs one; unused here).
+// The CPU twins of every step are in src/render/subpixel/{facet,bitmask,reference}.rs.
+//
+// 1. `silhouette`: one invocation per mesh edge; silhouette edges for the
+//    light (boundary, non-manifold, or faces on both sides of the light) are
+//    clipped to w > 0 and to the map and walked texel by texel (every texel
+//    the segment crosses is marked: a supercover walk).
+// 2. `sat_rows`, `sat_cols`: the inclusive summed-area table of the mask.
+// 3. `tile_count`, `tile_scan`, `tile_write`: triangle lists of TILE x TILE
+//    texel tiles. A tile is *active* when its neighbourhood (the tile grown
+//    by two tiles each side) holds a silhouette texel; a triangle enters
+//    the list of every active tile its projected bounding box touches.
+// 4. `visibility`: one invocation per pixel: the pixel's facet (tangent plane
+//    from the camera pass's depth and normal), its light-space footprint;
+//    no silhouette texel in it -> the standard bit in every sample; else
+//    every triangle of its tiles clips the facet's samples through four
+//    half-plane table lookups, ANDed per triangle, ORed over triangles.
+
+const TILE: u32 = 8u;
+// Footprints touching more tiles than this take the standard bit (counted).
+const MAX_FOOTPRINT_TILES: u32 = 36u;
+const ALL_SAMPLES: u32 = 0xffffffffu;
+// Half-plane table (bitmask.rs): 128 directions x 64 offsets over +-0.625 px.
+const ANGLES: f32 = 128.0;
+const OFFSETS: f32 = 64.0;
+const RADIUS: f32 = 0.625;
+const TAU: f32 = 6.283185307179586;
+const W_EPS: f32 = 1e-6;
+
+// Statistics words per light (see `AaStats` in gpu.rs).
+const STAT_PAIRS: u32 = 0u;
+const STAT_EXACT: u32 = 1u;
+const STAT_OVERFLOW: u32 = 2u;
+const STAT_WIDE: u32 = 3u;
+const STAT_TESTS: u32 = 4u;
+const STATS_PER_LIGHT: u32 = 8u;
+
+struct AaParams {
+    light: u32,
+    tiles_x: u32,
+    tiles_y: u32,
+    capacity: u32,
+    width: u32,
+    height: u32,
+    edge_count: u32,
+    triangle_count: u32,
+    bias: f32,
+    sample_mask: u32,
+    map_w: u32,
+    map_h: u32,
+    // Index of the summed-area table in `map_words` (after the mask).
+    sat_base: u32,
+    // Tiles per section of `tile_words` (count, cursor, offset).
+    tile_stride: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// a.w: 1 when the edge is a silhouette for every light (boundary or
+// non-manifold); else f0, f1 are its two triangles' planes (n, -n.a).
+struct Edge {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    f0: vec4<f32>,
+    f1: vec4<f32>,
+}
+
+// At most 8 storage buffers (wgpu's default limit): the mask and its
+// summed-area table share `map_words`; the statistics (STATS_PER_LIGHT words
+// per light, first) and the tiles' counts, cursors and offsets share
+// `tile_words`; the half-plane table is a uniform array.
+@group(1) @binding(0) var<uniform> params: AaParams;
+@group(1) @binding(1) var<storage, read> edges: array<Edge>;
+@group(1) @binding(2) var<storage, read_write> map_words: array<u32>;
+@group(1) @binding(3) var<storage, read_write> tile_words: array<atomic<u32>>;
+@group(1) @binding(4) var<storage, read_write> tile_list: array<u32>;
+@group(1) @binding(5) var<storage, read> vertex_words: array<f32>;
+@group(1) @binding(6) var<storage, read> index_words: array<u32>;
+@group(1) @binding(7) var<uniform> table: array<vec4<u32>, 2048>;
+@group(1) @binding(8) var<storage, read_write> occlusion: array<u32>;
+@group(1) @binding(9) var camera_masks: texture_2d<u32>;
+
+const STATS_WORDS: u32 = 256u;
+
+fn count_slot(tile: u32) -> u32 {
+    return STATS_WORDS + tile;
+}
+
+fn cursor_slot(tile: u32) -> u32 {
+    return STATS_WORDS + params.tile_stride + tile;
+}
+
+fn offset_slot(tile: u32) -> u32 {
+    return STATS_WORDS + 2u * params.tile_stride + tile;
+}
+
+fn add_stat(which: u32, value: u32) {
+    atomicAdd(&tile_words[params.light * STATS_PER_LIGHT + which], value);
+}
+
+// Dispatches are 2D when one dimension would exceed the workgroup limit.
+fn flat_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.x + gid.y * groups.x * 64u;
+}
+
+fn map_size() -> vec2<f32> {
+    return vec2<f32>(f32(params.map_w), f32(params.map_h));
+}
+
+// Map position in texels of a clip-space point with w > 0.
+fn to_texel(clip: vec4<f32>) -> vec2<f32> {
+    let ndc = clip.xy / clip.w;
+    return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * map_size();
+}
+
+fn mark(cell: vec2<i32>) {
+    map_words[u32(cell.y) * params.map_w + u32(cell.x)] = 1u;
+}
+
+@compute @workgroup_size(64)
+fn silhouette(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let e = flat_id(gid, groups);
+    if e >= params.edge_count {
+        return;
+    }
+    let edge = edges[e];
+    let light = lights.items[params.light];
+    let l = light.position;
+    if edge.a.w == 0.0 && (dot(edge.f0, l) > 0.0) == (dot(edge.f1, l) > 0.0) {
+        return;
+    }
+    var c0 = light.clip_from_world * vec4<f32>(edge.a.xyz, 1.0);
+    var c1 = light.clip_from_world * vec4<f32>(edge.b.xyz, 1.0);
+    if c0.w <= W_EPS && c1.w <= W_EPS {
+        return;
+    }
+    if c0.w <= W_EPS {
+        c0 = mix(c0, c1, (W_EPS - c0.w) / (c1.w - c0.w));
+    }
+    if c1.w <= W_EPS {
+        c1 = mix(c1, c0, (W_EPS - c1.w) / (c0.w - c1.w));
+    }
+    let p0 = to_texel(c0);
+    let d = to_texel(c1) - p0;
+    // Clip the segment to the map rectangle (Liang-Barsky).
+    var t0 = 0.0;
+    var t1 = 1.0;
+    let size = map_size();
+    for (var axis = 0; axis < 2; axis++) {
+        if abs(d[axis]) < 1e-20 {
+            if p0[axis] < 0.0 || p0[axis] > size[axis] {
+                return;
+            }
+        } else {
+            let ta = (0.0 - p0[axis]) / d[axis];
+            let tb = (size[axis] - p0[axis]) / d[axis];
+            t0 = max(t0, min(ta, tb));
+            t1 = min(t1, max(ta, tb));
+        }
+    }
+    if t0 > t1 {
+        return;
+    }
+    let q0 = p0 + d * t0;
+    let dd = d * (t1 - t0);
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    var cell = clamp(vec2<i32>(floor(q0)), vec2<i32>(0), last);
+    let end = clamp(vec2<i32>(floor(q0 + dd)), vec2<i32>(0), last);
+    let step = vec2<i32>(select(-1, 1, dd.x >= 0.0), select(-1, 1, dd.y >= 0.0));
+    let big = 1e30;
+    let delta = vec2<f32>(select(big, 1.0 / abs(dd.x), dd.x != 0.0), select(big, 1.0 / abs(dd.y), dd.y != 0.0));
+    var t_max = vec2<f32>(big);
+    if dd.x != 0.0 {
+        t_max.x = (f32(cell.x) + select(0.0, 1.0, dd.x > 0.0) - q0.x) / dd.x;
+    }
+    if dd.y != 0.0 {
+        t_max.y = (f32(cell.y) + select(0.0, 1.0, dd.y > 0.0) - q0.y) / dd.y;
+    }
+    let n = abs(end.x - cell.x) + abs(end.y - cell.y);
+    mark(cell);
+    for (var k = 0; k < n; k++) {
+        // Every step moves one cell towards `end`; an axis already there
+        // never moves (f32 ties at texel corners).
+        let move_x = cell.y == end.y || (cell.x != end.x && t_max.x < t_max.y);
+        if move_x {
+            cell.x += step.x;
+            t_max.x += delta.x;
+        } else {
+            cell.y += step.y;
+            t_max.y += delta.y;
+        }
+        mark(cell);
+    }
+}
+
+@compute @workgroup_size(64)
+fn sat_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let y = gid.x;
+    if y >= params.map_h {
+        return;
+    }
+    var run = 0u;
+    for (var x = 0u; x < params.map_w; x++) {
+        let i = y * params.map_w + x;
+        run += map_words[i];
+        map_words[params.sat_base + i] = run;
+    }
+}
+
+@compute @workgroup_size(64)
+fn sat_cols(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x;
+    if x >= params.map_w {
+        return;
+    }
+    var run = 0u;
+    for (var y = 0u; y < params.map_h; y++) {
+        let i = y * params.map_w + x;
+        run += map_words[params.sat_base + i];
+        map_words[params.sat_base + i] = run;
+    }
+}
+
+// Silhouette texels in [lo, hi] (inclusive, clamped into the map): four reads,
+// wrapping arithmetic as in `reference::rect_sum`.
+fn rect_sum(lo_in: vec2<i32>, hi_in: vec2<i32>) -> u32 {
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    let lo = clamp(lo_in, vec2<i32>(0), last);
+    let hi = clamp(hi_in, vec2<i32>(0), last);
+    if any(hi < lo) {
+        return 0u;
+    }
+    let w = params.map_w;
+    let s = params.sat_base;
+    var sum = map_words[s + u32(hi.y) * w + u32(hi.x)];
+    if lo.x > 0 {
+        sum -= map_words[s + u32(hi.y) * w + u32(lo.x - 1)];
+    }
+    if lo.y > 0 {
+        sum -= map_words[s + u32(lo.y - 1) * w + u32(hi.x)];
+    }
+    if lo.x > 0 && lo.y > 0 {
+        sum += map_words[s + u32(lo.y - 1) * w + u32(lo.x - 1)];
+    }
+    return sum;
+}
+
+fn tile_active(tile: vec2<i32>) -> bool {
+    let t = i32(TILE);
+    return rect_sum(tile * t - vec2<i32>(2 * t), tile * t + vec2<i32>(3 * t - 1)) > 0u;
+}
+
+fn vertex(t: u32, k: u32) -> vec3<f32> {
+    let i = index_words[3u * t + k] * 7u;
+    return vec3<f32>(vertex_words[i], vertex_words[i + 1u], vertex_words[i + 2u]);
+}
+
+// The tiles a triangle's projected bounding box (grown by a texel) touches:
+// xy the first, zw the last; empty (z < x) when it misses the map or lies
+// behind the light. A triangle crossing w = 0 takes the whole map.
+fn triangle_tiles(t: u32) -> vec4<i32> {
+    let light = lights.items[params.light];
+    var lo = vec2<f32>(1e30);
+    var hi = vec2<f32>(-1e30);
+    var behind = 0u;
+    for (var k = 0u; k < 3u; k++) {
+        let clip = light.clip_from_world * vec4<f32>(vertex(t, k), 1.0);
+        if clip.w <= W_EPS {
+            behind++;
+        } else {
+            let p = to_texel(clip);
+            lo = min(lo, p);
+            hi = max(hi, p);
+        }
+    }
+    let empty = vec4<i32>(0, 0, -1, -1);
+    if behind == 3u {
+        return empty;
+    }
+    let size = map_size();
+    if behind > 0u {
+        lo = vec2<f32>(0.0);
+        hi = size;
+    }
+    if any(hi < vec2<f32>(-1.0)) || any(lo > size + vec2<f32>(1.0)) {
+        return empty;
+    }
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    let a = clamp(vec2<i32>(floor(lo)) - vec2<i32>(1), vec2<i32>(0), last);
+    let b = clamp(vec2<i32>(floor(hi)) + vec2<i32>(1), vec2<i32>(0), last);
+    return vec4<i32>(a / i32(TILE), b / i32(TILE));
+}
+
+@compute @workgroup_size(64)
+fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let t = flat_id(gid, groups);
+    if t >= params.triangle_count {
+        return;
+    }
+    let r = triangle_tiles(t);
+    for (var ty = r.y; ty <= r.w; ty++) {
+        for (var tx = r.x; tx <= r.z; tx++) {
+            if tile_active(vec2<i32>(tx, ty)) {
+                atomicAdd(&tile_words[count_slot(u32(ty) * params.tiles_x + u32(tx))], 1u);
+            }
+        }
+    }
+}
+
+// One invocation: the exclusive prefix sum of the tile counts.
+@compute @workgroup_size(1)
+fn tile_scan() {
+    var run = 0u;
+    for (var i = 0u; i < params.tiles_x * params.tiles_y; i++) {
+        atomicStore(&tile_words[offset_slot(i)], run);
+        run += atomicLoad(&tile_words[count_slot(i)]);
+    }
+    add_stat(STAT_PAIRS, run);
+}
+
+@compute @workgroup_size(64)
+fn tile_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let t = flat_id(gid, groups);
+    if t >= params.triangle_count {
+        return;
+    }
+    let r = triangle_tiles(t);
+    for (var ty = r.y; ty <= r.w; ty++) {
+        for (var tx = r.x; tx <= r.z; tx++) {
+            if tile_active(vec2<i32>(tx, ty)) {
+                let tile = u32(ty) * params.tiles_x + u32(tx);
+                let slot = atomicLoad(&tile_words[offset_slot(tile)]) + atomicAdd(&tile_words[cursor_slot(tile)], 1u);
+                // Past the capacity: dropped; the tile's pixels see the
+                // overflow and keep the standard bit.
+                if slot < params.capacity {
+                    tile_list[slot] = t;
+                }
+            }
+        }
+    }
+}
+
+// The table's mask of line (a, b, c): samples s with a s.x + b s.y + c >= 0
+// (HalfPlaneTable::lookup).
+fn table_lookup(line: vec3<f32>) -> u32 {
+    let len = length(line.xy);
+    if !(len > 0.0) {
+        return select(0u, ALL_SAMPLES, line.z >= 0.0);
+    }
+    let e = (dot(line.xy, vec2<f32>(0.5)) + line.z) / len;
+    if e >= RADIUS {
+        return ALL_SAMPLES;
+    }
+    if e <= -RADIUS {
+        return 0u;
+    }
+    let turns = atan2(line.y, line.x) / TAU;
+    let a = i32(round(turns * ANGLES));
+    let angle = u32(((a % 128) + 128) % 128);
+    let offset = min(u32(floor((e + RADIUS) / (2.0 * RADIUS) * OFFSETS)), 63u);
+    let i = angle * 64u + offset;
+    return table[i / 4u][i % 4u];
+}
+
+// A plane through points a, b (w = 1) and the homogeneous light l.
+fn plane_through_light(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>) -> vec4<f32> {
+    let n = cross(b - a, l.xyz - a * l.w);
+    return vec4<f32>(n, -dot(n, a));
+}
+
+// Whether the origin (the pixel's point) lies on triangle v (within `tol` of its plane and of its
+// inside): the pixel's own triangle, which must not shadow its facet.
+fn holds(v: array<vec3<f32>, 3>, normal: vec3<f32>, scale: f32, tol: f32) -> bool {
+    if abs(dot(normal, v[0])) > tol * scale {
+        return false;
+    }
+    for (var k = 0u; k < 3u; k++) {
+        let p = v[k];
+        let edge = cross(normal, v[(k + 1u) % 3u] - p);
+        let inside = sign(dot(edge, v[(k + 2u) % 3u] - p));
+        if -dot(edge, p) * inside < -tol * length(edge) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The occluded samples of a facet (columns c0, c1, c2) by triangle t:
+// `facet::shadow_half_spaces` and `occluded_mask` for one triangle.
+fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32, point: vec3<f32>) -> u32 {
+    // In the facet's frame, centred on the pixel's point.
+    let v = array<vec3<f32>, 3>(vertex(t, 0u) - point, vertex(t, 1u) - point, vertex(t, 2u) - point);
+    let normal = cross(v[1] - v[0], v[2] - v[0]);
+    let scale = length(normal);
+    if !(scale > 0.0) || holds(v, normal, scale, bias) {
+        return 0u;
+    }
+    var mask = ALL_SAMPLES;
+    for (var k = 0u; k < 4u; k++) {
+        var h: vec4<f32>;
+        if k < 3u {
+            let p = v[k];
+            let q = v[(k + 1u) % 3u];
+            let r = v[(k + 2u) % 3u];
+            h = plane_through_light(p, q, l);
+            let side = dot(h, vec4<f32>(r, 1.0));
+            if !(abs(side) > 1e-6 * length(h.xyz) * length(r - p)) {
+                return 0u;
+            }
+            h *= sign(side);
+        } else {
+            let plane = vec4<f32>(normal, -dot(normal, v[0]));
+            let towards = dot(plane, l);
+            if towards == 0.0 {
+                return 0u;
+            }
+            h = plane * -sign(towards) - vec4<f32>(0.0, 0.0, 0.0, bias * scale);
+        }
+        mask &= table_lookup(vec3<f32>(dot(cols[0], h), dot(cols[1], h), dot(cols[2], h)));
+        if mask == 0u {
+            return 0u;
+        }
+    }
+    return mask;
+}
+
+fn unpack_normal(word: u32) -> vec3<f32> {
+    let p = unpack2x16snorm(word);
+    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
+    if n.z < 0.0 {
+        let s = select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0));
+        n = vec3<f32>((1.0 - abs(n.yx)) * s, n.z);
+    }
+    return normalize(n);
+}
+
+// The near-plane point of pixel (px, py) at pixel-local offset s.
+fn pixel_near(px: u32, py: u32, s: vec2<f32>, size: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>((f32(px) + s.x) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + s.y) / size.y * 2.0);
+    let h = camera.world_from_clip * vec4<f32>(ndc, 0.0, 1.0);
+    return h.xyz / h.w;
+}
+
+@compute @workgroup_size(64)
+fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let id = flat_id(gid, groups);
+    let pixels = params.width * params.height;
+    if id >= pixels {
+        return;
+    }
+    let out = params.light * pixels + id;
+    let px = id % params.width;
+    let py = id / params.width;
+    let words = textureLoad(camera_masks, vec2<u32>(px, py), 0);
+    let bit = 1u << params.light;
+    let standard = select(0u, ALL_SAMPLES, (words.y & bit) != 0u) & params.sample_mask;
+    occlusion[out] = standard;
+    let depth = bitcast<f32>(words.x);
+    if (words.z & bit) == 0u || depth >= 1.0 {
+        return;
+    }
+    let light = lights.items[params.light];
+    let size = vec2<f32>(f32(params.width), f32(params.height));
+    let centre_ndc = vec2<f32>((f32(px) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + 0.5) / size.y * 2.0);
+    let hp = camera.world_from_clip * vec4<f32>(centre_ndc, depth, 1.0);
+    let point = hp.xyz / hp.w;
+    let n = unpack_normal(words.w);
+    // The pixel's facet (facet.rs, Facet::new) in a frame centred on its
+    // point (f32 loses too much on far pixels in world coordinates): view
+    // rays D(s) = D0 s.x + D1 s.y + D2 from the eye E through the pixel's
+    // near-plane points meet the plane n.x = 0 at
+    // X(s) = ((n.D(s)) E - (n.E) D(s), n.D(s)), linear in s.
+    let near = pixel_near(px, py, vec2<f32>(0.0), size);
+    let d0 = pixel_near(px, py, vec2<f32>(1.0, 0.0), size) - near;
+    let d1 = pixel_near(px, py, vec2<f32>(0.0, 1.0), size) - near;
+    let d2 = near - camera.eye.xyz;
+    let eye = camera.eye.xyz - point;
+    let ne = dot(n, eye);
+    var cols = array<vec4<f32>, 3>(
+        vec4<f32>(dot(n, d0) * eye - ne * d0, dot(n, d0)),
+        vec4<f32>(dot(n, d1) * eye - ne * d1, dot(n, d1)),
+        vec4<f32>(dot(n, d2) * eye - ne * d2, dot(n, d2)),
+    );
+    let mid = cols[0] * 0.5 + cols[1] * 0.5 + cols[2];
+    if !(abs(mid.w) > 0.0) {
+        return;
+    }
+    if mid.w < 0.0 {
+        cols = array<vec4<f32>, 3>(-cols[0], -cols[1], -cols[2]);
+    }
+    // The light in the local frame.
+    let l = vec4<f32>(light.position.xyz - point * light.position.w, light.position.w);
+    // Corners: in front of the camera and the light; footprint in texels.
+    var lo = vec2<f32>(1e30);
+    var hi = vec2<f32>(-1e30);
+    var first = vec3<f32>(0.0);
+    var diameter = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        let s = vec2<f32>(f32(k & 1u), f32(k >> 1u));
+        let x = cols[0] * s.x + cols[1] * s.y + cols[2];
+        if !(x.w > 0.0) {
+            return;
+        }
+        let local = x.xyz / x.w;
+        // In front of the camera, as Facet::new asks.
+        if !(dot(local - eye, d0 * s.x + d1 * s.y + d2) > 0.0) {
+            return;
+        }
+        if k == 0u {
+            first = local;
+        } else {
+            diameter = max(diameter, distance(local, first));
+        }
+        let world = local + point;
+        let clip = light.clip_from_world * vec4<f32>(world, 1.0);
+        if !(clip.w > 0.0) {
+            return;
+        }
+        let texel = to_texel(clip);
+        lo = min(lo, texel);
+        hi = max(hi, texel);
+    }
+    let map = map_size();
+    if any(hi < vec2<f32>(0.0)) || any(lo >= map) {
+        return;
+    }
+    let a = vec2<i32>(floor(lo));
+    let b = vec2<i32>(floor(hi));
+    if rect_sum(a, b) == 0u {
+        return;
+    }
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    let ta = clamp(a, vec2<i32>(0), last) / i32(TILE);
+    let tb = clamp(b, vec2<i32>(0), last) / i32(TILE);
+    let tiles = u32((tb.x - ta.x + 1) * (tb.y - ta.y + 1));
+    if tiles > MAX_FOOTPRINT_TILES {
+        add_stat(STAT_WIDE, 1u);
+        return;
+    }
+    for (var ty = ta.y; ty <= tb.y; ty++) {
+        for (var tx = ta.x; tx <= tb.x; tx++) {
+            let tile = u32(ty) * params.tiles_x + u32(tx);
+            if !tile_active(vec2<i32>(tx, ty)) {
+                add_stat(STAT_WIDE, 1u);
+                return;
+            }
+            if atomicLoad(&tile_words[offset_slot(tile)]) + atomicLoad(&tile_words[count_slot(tile)]) > params.capacity {
+                add_stat(STAT_OVERFLOW, 1u);
+                return;
+            }
+        }
+    }
+    // Triangles holding the pixel's own point (its triangle) are skipped; the others' planes are pushed away from the
+    // light by the scene bias plus a hundredth of the facet's size (the
+    // depth buffer's error in the reconstructed point).
+    let bias = params.bias + 0.01 * diameter;
+    var occluded = 0u;
+    var tests = 0u;
+    for (var ty = ta.y; ty <= tb.y; ty++) {
+        for (var tx = ta.x; tx <= tb.x; tx++) {
+            let tile = u32(ty) * params.tiles_x + u32(tx);
+            let start = atomicLoad(&tile_words[offset_slot(tile)]);
+            let count = atomicLoad(&tile_words[count_slot(tile)]);
+            tests += count;
+            for (var k = 0u; k < count; k++) {
+                occluded |= triangle_mask(tile_list[start + k], cols, l, bias, point);
+                if (occluded & params.sample_mask) == params.sample_mask {
+                    break;
+                }
+            }
+        }
+    }
+    add_stat(STAT_EXACT, 1u);
+    add_stat(STAT_TESTS, tests);
+    occlusion[out] = occluded & params.sample_mask;
+}
