@@ -168,6 +168,10 @@ struct ExperimentArgs {
     /// such a run as a breakdown, not as the table.
     #[arg(long)]
     timing_gpu_stages: bool,
+    /// Lookup modes timed as "focused + <lookup>" pipelines of the timing table, comma-separated
+    /// (spsm, sgsm, aa8, aa16, aa32; default spsm).
+    #[arg(long, value_delimiter = ',', value_parser = parse_lookup)]
+    timing_lookups: Option<Vec<ShadowLookup>>,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -387,6 +391,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             lights: args.timing_lights.clone(),
             maps: args.timing_maps.clone(),
             gpu_stages: args.timing_gpu_stages,
+            lookups: args.timing_lookups.clone().unwrap_or_else(|| TimingOptions::default().lookups),
             ..Default::default()
         };
         eprintln!(

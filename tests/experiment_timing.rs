@@ -8,6 +8,7 @@
 mod render_common;
 
 use lixel::experiment::{self, ExperimentConfig, Preset, RatioEstimate, TimingOptions};
+use lixel::render::ShadowLookup;
 
 #[test]
 fn timing_runs_every_pipeline_in_paired_rounds() {
@@ -32,15 +33,20 @@ fn timing_runs_every_pipeline_in_paired_rounds() {
         assert!(stages[0].optimize.is_zero() && !stages[2].optimize.is_zero());
         assert!(stages.iter().all(|s| s.shadow.is_none()), "GPU stages are off by default");
         assert!(row.optimized_ratio() > 0.0 && row.optimized_ratio().is_finite());
-        // The SPSM pipeline (focused maps, sub-pixel lookup) pairs with focused too.
-        assert!(row.spsm_ratio() > 0.0 && row.spsm_ratio().is_finite(), "{row:?}");
+        // The lookup pipeline (focused maps, the SPSM lookup by default) pairs with focused too.
+        assert_eq!(row.pipelines().last().map(String::as_str), Some("focused + spsm"));
+        assert_eq!((row.blocks.len(), row.stages.len(), row.cpu.len()), (5, 5, 5));
+        let spsm = row.lookup_ratio(ShadowLookup::Spsm(Default::default())).unwrap();
+        assert!(spsm > 0.0 && spsm.is_finite(), "{row:?}");
+        assert_eq!(row.lookup_ratio(ShadowLookup::DepthCompare), None);
         assert!(RatioEstimate::from_ratios(&row.round_ratios(4)).is_some());
         let estimate = RatioEstimate::from_ratios(&row.round_ratios(2)).unwrap();
         assert!(estimate.interval[0] <= estimate.ratio && estimate.ratio <= estimate.interval[1]);
     }
     let md = experiment::timing_markdown(&rows);
     assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 2 | 128²")).count(), 2 + 10);
-    assert!(md.contains("(focused + SPSM) / focused: cells median"));
+    assert!(md.contains("(focused + spsm) / focused: cells median"));
+    assert!(md.contains("| focused + spsm ms |") && md.contains("| spsm / focused, paired rounds (95% CI) |"));
     assert!(md.contains("scene-optimized / focused: cells median"));
     assert!(md.contains("over 4 paired rounds"));
     assert!(!md.contains("GPU shadow"), "no GPU columns without GPU stages");

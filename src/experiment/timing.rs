@@ -4,10 +4,11 @@
 //! maps shown while the analysis passes, readbacks and optimizations run and
 //! are thrown away), which isolates the machinery's own cost from what the
 //! optimized maps' shapes do to the shadow and camera passes; and "focused +
-//! SPSM" (focused maps with the sub-pixel shadow-map lookup, issue 16: its
-//! conservative shadow pass and its lookup), paired against focused.
+//! <lookup>" for each lookup mode asked for ([`TimingOptions::lookups`]:
+//! focused maps with, e.g., the SPSM lookup, its conservative shadow pass and
+//! its lookup), paired against focused.
 //!
-//! The five pipelines are interleaved in blocks of whole optimizer cadences
+//! The pipelines are interleaved in blocks of whole optimizer cadences
 //! (15 frames: five analysis passes, each light looked up once in a focused
 //! map), the order rotating from round to round, so that drift in the
 //! machine's speed reaches all of them alike. A block is timed from an idle
@@ -22,6 +23,10 @@ use super::{camera_for, light_for, load_scene, ExperimentConfig, ExperimentError
 use crate::render::{
     GpuFrameTimes, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLookup, ShadowLoop, SpsmOptions,
 };
+
+/// Pipelines of every cell before the lookup pipelines, in the order of
+/// [`TimingRow::frame_times`].
+const BASE_PIPELINES: usize = 4;
 use crate::{Camera, Light, Parameterization, SceneBounds, ShadowMapSize};
 
 /// What to time.
@@ -45,6 +50,9 @@ pub struct TimingOptions {
     /// each: optimized / focused 1.14 with them, 1.07 without), so a run with
     /// them is a breakdown, not the table.
     pub gpu_stages: bool,
+    /// Lookup modes timed as "focused + <lookup>" pipelines, after the four
+    /// standard ones (default: SPSM). Each adds a pipeline to every round.
+    pub lookups: Vec<ShadowLookup>,
 }
 
 impl Default for TimingOptions {
@@ -56,6 +64,7 @@ impl Default for TimingOptions {
             block: 15,
             warmup_blocks: 1,
             gpu_stages: false,
+            lookups: vec![ShadowLookup::Spsm(SpsmOptions::default())],
         }
     }
 }
@@ -79,13 +88,14 @@ pub struct TimingRow {
     /// used: the machinery's own cost, apart from what the optimized maps'
     /// shapes do to the shadow and camera passes.
     pub focused_with_analysis: Duration,
-    /// Mean frame time of focused maps with the SPSM lookup
-    /// ([`ShadowLookup::Spsm`](crate::render::ShadowLookup::Spsm)).
-    pub focused_spsm: Duration,
+    /// Mean frame time of focused maps with each of
+    /// [`TimingOptions::lookups`].
+    pub focused_lookups: Vec<(ShadowLookup, Duration)>,
     /// Wall time of every timed block, per pipeline in the order of
-    /// [`PIPELINES`]; block `k` of every pipeline belongs to round `k` (the
-    /// same frames of the walk, timed back to back), so they pair up.
-    pub blocks: [Vec<Duration>; 5],
+    /// [`pipelines`](Self::pipelines); block `k` of every pipeline belongs to
+    /// round `k` (the same frames of the walk, timed back to back), so they
+    /// pair up.
+    pub blocks: Vec<Vec<Duration>>,
     /// Timed rounds.
     pub rounds: usize,
     /// Optimizations run during the timed frames.
@@ -93,14 +103,17 @@ pub struct TimingRow {
     /// Analysis passes queued during the timed frames.
     pub analyses: usize,
     /// Mean process CPU time per frame (all threads, lavapipe's included),
-    /// per pipeline in the order of [`PIPELINES`]; `None` off Linux.
-    pub cpu: [Option<Duration>; 5],
-    /// Where each pipeline's frame time went, in the order of [`PIPELINES`].
-    pub stages: [StageTimes; 5],
+    /// per pipeline in the order of [`pipelines`](Self::pipelines); `None`
+    /// off Linux.
+    pub cpu: Vec<Option<Duration>>,
+    /// Where each pipeline's frame time went, in the order of
+    /// [`pipelines`](Self::pipelines).
+    pub stages: Vec<StageTimes>,
 }
 
-/// The pipelines of a [`TimingRow`], in the order of [`TimingRow::stages`].
-pub const PIPELINES: [&str; 5] = ["focused", "LiSPSM", "scene-optimized", "focused + analysis", "focused + SPSM"];
+/// The standard pipelines of a [`TimingRow`], first in
+/// [`TimingRow::pipelines`]; the lookup pipelines follow.
+pub const PIPELINES: [&str; BASE_PIPELINES] = ["focused", "LiSPSM", "scene-optimized", "focused + analysis"];
 
 /// Mean cost per frame of one pipeline's stages over the timed frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -169,13 +182,24 @@ impl StageSums {
 }
 
 impl TimingRow {
-    /// Mean frame time per pipeline, in the order of [`PIPELINES`].
+    /// Every pipeline's name: [`PIPELINES`], then `focused + <lookup>` for
+    /// each of [`focused_lookups`](Self::focused_lookups).
     #[must_use]
-    pub fn frame_times(&self) -> [Duration; 5] {
-        [self.focused, self.lispsm, self.optimized, self.focused_with_analysis, self.focused_spsm]
+    pub fn pipelines(&self) -> Vec<String> {
+        let lookups = self.focused_lookups.iter().map(|(l, _)| format!("focused + {}", l.name()));
+        PIPELINES.iter().map(|p| (*p).to_owned()).chain(lookups).collect()
     }
 
-    /// Mean frame time of pipeline `k` ([`PIPELINES`]) over focused's.
+    /// Mean frame time per pipeline, in the order of
+    /// [`pipelines`](Self::pipelines).
+    #[must_use]
+    pub fn frame_times(&self) -> Vec<Duration> {
+        let base = [self.focused, self.lispsm, self.optimized, self.focused_with_analysis];
+        base.into_iter().chain(self.focused_lookups.iter().map(|(_, d)| *d)).collect()
+    }
+
+    /// Mean frame time of pipeline `k` ([`pipelines`](Self::pipelines)) over
+    /// focused's.
     #[must_use]
     pub fn ratio(&self, k: usize) -> f64 {
         let times = self.frame_times();
@@ -188,7 +212,8 @@ impl TimingRow {
         self.ratio(2)
     }
 
-    /// Per-round ratios of pipeline `k` ([`PIPELINES`]) to focused.
+    /// Per-round ratios of pipeline `k` ([`pipelines`](Self::pipelines)) to
+    /// focused.
     #[must_use]
     pub fn round_ratios(&self, k: usize) -> Vec<f64> {
         self.blocks[k].iter().zip(&self.blocks[0]).map(|(p, f)| p.as_secs_f64() / f.as_secs_f64()).collect()
@@ -206,10 +231,12 @@ impl TimingRow {
         self.ratio(3)
     }
 
-    /// Mean (focused + SPSM) / focused frame time.
+    /// Mean (focused + `lookup`) / focused frame time; `None` when `lookup`
+    /// was not timed.
     #[must_use]
-    pub fn spsm_ratio(&self) -> f64 {
-        self.ratio(4)
+    pub fn lookup_ratio(&self, lookup: ShadowLookup) -> Option<f64> {
+        let i = self.focused_lookups.iter().position(|(l, _)| *l == lookup)?;
+        Some(self.ratio(BASE_PIPELINES + i))
     }
 }
 
@@ -220,8 +247,8 @@ enum Pipeline {
     Optimized,
     /// Focused maps shown; analysis and optimization run but are discarded.
     FocusedWithAnalysis,
-    /// Focused maps with the SPSM lookup.
-    FocusedSpsm,
+    /// Focused maps with another lookup.
+    FocusedLookup(ShadowLookup),
 }
 
 impl Pipeline {
@@ -232,16 +259,14 @@ impl Pipeline {
             Self::LiSpsm => LoopPolicy::Fixed(Parameterization::LiSpsm(Default::default())),
             Self::Optimized => LoopPolicy::Optimized,
             Self::FocusedWithAnalysis => LoopPolicy::FixedWithAnalysis(Parameterization::Focused),
-            Self::FocusedSpsm => LoopPolicy::Fixed(Parameterization::Focused),
+            Self::FocusedLookup(_) => LoopPolicy::Fixed(Parameterization::Focused),
         }
     }
 
     /// The frame loop's settings (the lookup) for this pipeline.
     fn options(self) -> LoopOptions {
         match self {
-            Self::FocusedSpsm => {
-                LoopOptions { lookup: ShadowLookup::Spsm(SpsmOptions::default()), ..Default::default() }
-            }
+            Self::FocusedLookup(lookup) => LoopOptions { lookup, ..Default::default() },
             _ => LoopOptions::default(),
         }
     }
@@ -427,16 +452,10 @@ pub fn run_timing(
         for &count in &options.lights {
             let lights: Vec<Light> = (0..count).map(|i| light_for(config, &scene, i)).collect();
             let cell = Cell { base, lights: &lights, bounds: scene.bounds(), map: ShadowMapSize::square(map) };
-            let mut runs = [
-                Pipeline::Focused,
-                Pipeline::LiSpsm,
-                Pipeline::Optimized,
-                Pipeline::FocusedWithAnalysis,
-                Pipeline::FocusedSpsm,
-            ]
-            .map(|p| Run::new(p, count))
-            .into_iter()
-            .collect::<Result<Vec<_>, _>>()?;
+            let base = [Pipeline::Focused, Pipeline::LiSpsm, Pipeline::Optimized, Pipeline::FocusedWithAnalysis];
+            let lookups = options.lookups.iter().map(|&l| Pipeline::FocusedLookup(l));
+            let mut runs =
+                base.into_iter().chain(lookups).map(|p| Run::new(p, count)).collect::<Result<Vec<_>, _>>()?;
             for run in &mut runs {
                 for _ in 0..options.warmup_blocks {
                     run.block(&mut renderer, &cell, block, false)?;
@@ -458,13 +477,18 @@ pub fn run_timing(
                 lispsm: mean(&runs[1]),
                 optimized: mean(&runs[2]),
                 focused_with_analysis: mean(&runs[3]),
-                focused_spsm: mean(&runs[4]),
-                blocks: [0, 1, 2, 3, 4].map(|k| runs[k].timed.clone()),
+                focused_lookups: options
+                    .lookups
+                    .iter()
+                    .zip(&runs[BASE_PIPELINES..])
+                    .map(|(&l, r)| (l, mean(r)))
+                    .collect(),
+                blocks: runs.iter().map(|r| r.timed.clone()).collect(),
                 rounds,
                 optimizations: runs[2].optimizations,
                 analyses: runs[2].analyses,
-                stages: [0, 1, 2, 3, 4].map(|k| runs[k].sums.means()),
-                cpu: [0, 1, 2, 3, 4].map(|k| mean_cpu(&runs[k])),
+                stages: runs.iter().map(|r| r.sums.means()).collect(),
+                cpu: runs.iter().map(mean_cpu).collect(),
             };
             progress(&row);
             rows.push(row);
@@ -479,31 +503,51 @@ pub fn run_timing(
 /// The table as markdown, ratios against focused.
 #[must_use]
 pub fn timing_markdown(rows: &[TimingRow]) -> String {
-    let mut md = String::from(
-        "| lights | map | focused ms | LiSPSM ms | scene-optimized ms | focused + analysis ms | focused + SPSM ms | LiSPSM / focused | optimized / focused | optimized / focused, paired rounds (95% CI) | (focused + analysis) / focused | SPSM / focused, paired rounds (95% CI) | CPU time optimized / focused | analyses | optimizations |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---:|---:|---:|\n",
-    );
+    // The lookup pipelines of the first row name the extra columns (every
+    // row of a run times the same lookups).
+    let lookups: Vec<&str> =
+        rows.first().map_or_else(Vec::new, |r| r.focused_lookups.iter().map(|(l, _)| l.name()).collect());
+    let mut md = String::from("| lights | map | focused ms | LiSPSM ms | scene-optimized ms | focused + analysis ms |");
+    for l in &lookups {
+        md.push_str(&format!(" focused + {l} ms |"));
+    }
+    md.push_str(" LiSPSM / focused | optimized / focused | optimized / focused, paired rounds (95% CI) | (focused + analysis) / focused |");
+    for l in &lookups {
+        md.push_str(&format!(" {l} / focused, paired rounds (95% CI) |"));
+    }
+    md.push_str(" CPU time optimized / focused | analyses | optimizations |\n|---:|---:|---:|---:|---:|---:|");
+    md.push_str(&"---:|".repeat(lookups.len()));
+    md.push_str("---:|---:|---|---:|");
+    md.push_str(&"---|".repeat(lookups.len()));
+    md.push_str("---:|---:|---:|\n");
     for r in rows {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         let paired =
             |k| RatioEstimate::from_ratios(&r.round_ratios(k)).map_or_else(|| "-".to_owned(), |e| e.to_string());
-        let (paired, spsm) = (paired(2), paired(4));
         let cpu = r.optimized_cpu_ratio().map_or_else(|| "-".to_owned(), |c| format!("{c:.3}"));
         md.push_str(&format!(
-            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {paired} | {:.3} | {spsm} | {cpu} | {} | {} |\n",
+            "| {} | {}² | {:.1} | {:.1} | {:.1} | {:.1} |",
             r.lights,
             r.map,
             ms(r.focused),
             ms(r.lispsm),
             ms(r.optimized),
             ms(r.focused_with_analysis),
-            ms(r.focused_spsm),
+        ));
+        for (_, d) in &r.focused_lookups {
+            md.push_str(&format!(" {:.1} |", ms(*d)));
+        }
+        md.push_str(&format!(
+            " {:.3} | {:.3} | {} | {:.3} |",
             r.ratio(1),
             r.optimized_ratio(),
-            r.analysis_ratio(),
-            r.analyses,
-            r.optimizations
+            paired(2),
+            r.analysis_ratio()
         ));
+        for k in 0..r.focused_lookups.len() {
+            md.push_str(&format!(" {} |", paired(BASE_PIPELINES + k)));
+        }
+        md.push_str(&format!(" {cpu} | {} | {} |\n", r.analyses, r.optimizations));
     }
     if rows.is_empty() {
         return md;
@@ -512,12 +556,13 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
         "\nOver all cells (per-cell ratios of mean frame times: median and largest; every paired round of every \
          cell: geometric mean with its 95% confidence interval):\n\n",
     );
-    for (k, what) in [
-        (2, "scene-optimized / focused"),
-        (3, "(focused + analysis) / focused"),
-        (1, "LiSPSM / focused"),
-        (4, "(focused + SPSM) / focused"),
-    ] {
+    let base = [
+        (2, "scene-optimized / focused".to_owned()),
+        (3, "(focused + analysis) / focused".to_owned()),
+        (1, "LiSPSM / focused".to_owned()),
+    ];
+    let lookups = lookups.iter().enumerate().map(|(i, l)| (BASE_PIPELINES + i, format!("(focused + {l}) / focused")));
+    for (k, what) in base.into_iter().chain(lookups) {
         let mut cells: Vec<f64> = rows.iter().map(|r| r.ratio(k)).collect();
         let largest = cells.iter().copied().fold(0.0f64, f64::max);
         let all: Vec<f64> = rows.iter().flat_map(|r| r.round_ratios(k)).collect();
@@ -558,7 +603,7 @@ fn stages_markdown(rows: &[TimingRow]) -> String {
     let ms = |d: Duration| format!("{:.1}", d.as_secs_f64() * 1e3);
     let or_dash = |d: Option<Duration>| d.map_or_else(|| "-".to_owned(), ms);
     for r in rows {
-        for (((name, frame), stage), cpu) in PIPELINES.iter().zip(r.frame_times()).zip(&r.stages).zip(r.cpu) {
+        for (((name, frame), stage), cpu) in r.pipelines().iter().zip(r.frame_times()).zip(&r.stages).zip(&r.cpu) {
             md.push_str(&format!(
                 "| {} | {}² | {name} | {} | {} | {} | {} |",
                 r.lights,
@@ -566,7 +611,7 @@ fn stages_markdown(rows: &[TimingRow]) -> String {
                 ms(frame),
                 ms(stage.optimize),
                 ms(stage.solve),
-                or_dash(cpu)
+                or_dash(*cpu)
             ));
             if with_gpu {
                 md.push_str(&format!(
