@@ -395,10 +395,10 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
             ..Default::default()
         };
         eprintln!(
-            "timing {} cells of {} frames on {:?}...",
+            "timing {} cells of {} frames on scene {}...",
             options.lights.len() * options.maps.len(),
             options.frames,
-            config.scene
+            serde_json::to_string(&config.scene).unwrap_or_default()
         );
         let progress = |row: &experiment::TimingRow| {
             if !args.quiet {
