@@ -35,7 +35,9 @@ use crate::scene::SceneBounds;
 /// (kept in a thread-local); [`ShadowProblem::solve_with`](crate::ShadowProblem::solve_with)
 /// takes one explicitly. Once its buffers have grown to the largest problem
 /// solved, solving allocates nothing. Results never depend on what the
-/// workspace held before (see the [module docs](self)).
+/// workspace held before: its camera-only cache is keyed by the camera's
+/// matrices, clip distances and the scene bounds (bit for bit) and the plane
+/// tolerance, and rebuilt on any change.
 #[derive(Clone, Debug)]
 pub struct SolveWorkspace {
     pub(crate) clip: ClipWorkspace,

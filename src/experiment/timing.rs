@@ -4,7 +4,7 @@
 //! maps shown while the analysis passes, readbacks and optimizations run and
 //! are thrown away), which isolates the machinery's own cost from what the
 //! optimized maps' shapes do to the shadow and camera passes; and "focused +
-//! <lookup>" for each lookup mode asked for ([`TimingOptions::lookups`]:
+//! `<lookup>`" for each lookup mode asked for ([`TimingOptions::lookups`]:
 //! focused maps with, e.g., the SPSM lookup, its conservative shadow pass and
 //! its lookup), paired against focused.
 //!
@@ -50,7 +50,7 @@ pub struct TimingOptions {
     /// each: optimized / focused 1.14 with them, 1.07 without), so a run with
     /// them is a breakdown, not the table.
     pub gpu_stages: bool,
-    /// Lookup modes timed as "focused + <lookup>" pipelines, after the four
+    /// Lookup modes timed as "focused + `<lookup>`" pipelines, after the four
     /// standard ones (default: SPSM). Each adds a pipeline to every round.
     pub lookups: Vec<ShadowLookup>,
 }

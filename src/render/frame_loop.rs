@@ -40,7 +40,7 @@ pub enum LoopPolicy {
     /// [`LoopFrame::matrices`] holds one matrix per slot), with fixed or
     /// SDSM splits and fixed or scene-optimized cascade matrices; analysis
     /// passes every [`ScheduleOptions::optimize_every`] frames when the
-    /// policy needs them. See [`cascade_loop`](super::cascade_loop).
+    /// policy needs them. See `render/cascade_loop.rs`.
     Cascaded(CascadePolicy),
 }
 

@@ -2,7 +2,7 @@
 //! `shared/papers/sgsm-sub-geometry-shadow-maps.txt`) as a shadow lookup of
 //! the renderer, for every [`LightMatrix`](crate::LightMatrix).
 //!
-//! Why: SPSM ([`spsm`](super::spsm)) keeps only the closest triangle per
+//! Why: SPSM ([`super::spsm`]) keeps only the closest triangle per
 //! texel; where several triangles share a texel (tessellated curved
 //! casters, creases) a sample on another triangle's part of the texel is
 //! rebuilt on the wrong plane. SGSM finds the triangles at the texel's four
@@ -13,7 +13,7 @@
 //! - **Pass** (`shaders/sgsm_pass.wgsl`): SPSM's conservative pass plus a
 //!   second `R32Uint` target with the stored triangle's plane slopes (two
 //!   f16; the normal in the matrix's post-projective space).
-//! - **Sweep** ([`gpu`], `shaders/sgsm_sweep.wgsl`): a compute pass, one
+//! - **Sweep** (`sgsm/gpu.rs`, `shaders/sgsm_sweep.wgsl`): a compute pass, one
 //!   invocation per map row, stepping along it one texel at a time; per
 //!   texel it finds each corner's triangle among the four texels around the
 //!   corner, groups the corners by plane and writes a mask word

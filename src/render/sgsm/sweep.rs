@@ -13,7 +13,7 @@
 //! two corner triangles are on one plane when they are the same texel's or
 //! their normals (the conservative pass's f16 slopes) and their depths at
 //! the texel centre agree within the packing's precision. The grouping,
-//! the [`pattern`](super::pattern) index and the corners' slots make the
+//! the [`super::pattern`] index and the corners' slots make the
 //! texel's [`MaskWord`]. A texel into which a stored triangle of its 3x3
 //! reaches that lies on none of the corner planes is unrecognised: that
 //! geometry touches no corner, and the corners do not explain the texel.
