@@ -17,17 +17,20 @@
 //! splits, LiSPSM maps), `optimized-cascades` (same splits, each cascade
 //! scene-optimized from the readback). `--picture` tints the first sun's
 //! image by cascade for one cascaded method (optimized-cascades unless
-//! `--picture-method` names another). The large preset puts the eye 1.7
-//! units above a 2000-unit floor with objects over 1500 units and a far
-//! plane of 1500.
+//! `--picture-method` names another). The large preset is the experiment's
+//! (`lixel experiment --preset large`: [`SceneSource::Large`], its camera
+//! from `experiment::camera_for`): the eye 1.7 units above a 2000-unit floor
+//! with objects over 1500 units and a far plane of 1500. The experiment
+//! measures the same methods (`--cascades N`); this example adds the
+//! `--walk` and the `--picture`.
 
 #[path = "support/mod.rs"]
 mod support;
 
-use glam::{DVec3, UVec2};
+use glam::UVec2;
 use lixel::experiment::stability::CameraPath;
-use lixel::experiment::RatioEstimate;
-use lixel::mesh::{Flicker, ProceduralScene, RayCaster, Scene, ShadowMasks};
+use lixel::experiment::{self, ExperimentConfig, Preset, RatioEstimate, SceneSource};
+use lixel::mesh::{Flicker, RayCaster, Scene, ShadowMasks};
 use lixel::render::{CascadePolicy, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLoop};
 use lixel::{Camera, LightMatrix, Parameterization, ShadowMapSize, ShadowProblem};
 
@@ -36,19 +39,6 @@ fn main() {
         eprintln!("cascades: {e}");
         std::process::exit(1);
     }
-}
-
-/// The sun's shadow bit from a frame whose lights are its cascades: not lit
-/// where no cascade faces the sun (facing away, or outside every cascade)
-/// or the owning cascade's bit is set.
-fn sun_masks(masks: &ShadowMasks) -> ShadowMasks {
-    let mut out = masks.clone();
-    for i in 0..out.shadow.len() {
-        let (s, f) = (masks.shadow[i], masks.facing[i]);
-        out.shadow[i] = u32::from(s != 0);
-        out.facing[i] = u32::from(f != 0);
-    }
-    out
 }
 
 fn render_masks(
@@ -63,7 +53,8 @@ fn render_masks(
     let frame = Frame { camera, lights: matrices, masks: true, analysis: None, lookup: Default::default() };
     renderer.render(&frame).map_err(|e| e.to_string())?;
     let masks = renderer.read_masks().map_err(|e| e.to_string())?;
-    Ok(if cascaded { sun_masks(&masks) } else { masks })
+    // The sun's bit from a frame whose lights are its cascades.
+    Ok(if cascaded { experiment::fold_cascade_masks(&masks, &[0, matrices.len()]) } else { masks })
 }
 
 /// The last frame's picture with each pixel tinted by the cascade that
@@ -102,20 +93,14 @@ fn run() -> Result<(), String> {
     let large = args.value("--preset").unwrap_or("large") == "large";
     let triangles: usize = args.parse("--triangles", 300_000)?;
     let (scene, camera): (Scene, Camera) = if large {
-        let scene =
-            ProceduralScene { triangle_budget: triangles, objects_per_side: 40, floor_size: 2000.0, seed: 2026 };
-        let eye = DVec3::new(3.0, 1.7, 760.0);
-        let camera = Camera::look_at(
-            eye,
-            eye + DVec3::new(0.05, -0.04, -1.0),
-            DVec3::Y,
-            60f64.to_radians(),
-            UVec2::splat(size),
-            0.1,
-            1500.0,
-        )
-        .map_err(|e| e.to_string())?;
-        (scene.build(), camera)
+        let config = ExperimentConfig {
+            scene: SceneSource::Large { triangles },
+            screen: size,
+            ..ExperimentConfig::preset(Preset::Large)
+        };
+        let scene = experiment::load_scene(&config.scene).map_err(|e| e.to_string())?;
+        let camera = experiment::camera_for(&config, &scene).map_err(|e| e.to_string())?;
+        (scene, camera)
     } else {
         (support::scene("default", None)?, support::walk_camera(0.1, UVec2::splat(size)))
     };

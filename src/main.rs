@@ -99,9 +99,14 @@ struct ExperimentArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     map: Option<u32>,
     /// Comma-separated methods: normal, focused, focused-snapped, lispsm, psm, plane-optimal, optimized, optimized-argmin,
-    /// each optionally with a lookup suffix, e.g. focused+spsm (sub-pixel shadow maps), focused+sgsm (sub-geometry shadow maps).
+    /// each optionally with a lookup suffix, e.g. focused+spsm (sub-pixel shadow maps), focused+sgsm (sub-geometry shadow maps);
+    /// with --light directional --cascades N also the cascade methods csm, sdsm, sdsm-lispsm, optimized-cascades.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
+    /// Cascades per sun (1 to 8) for the cascade methods (csm, sdsm, sdsm-lispsm, optimized-cascades; added to the
+    /// default --methods). At equal total texels: N maps of --map² per sun for them, one map of (map·√N)² for the others.
+    #[arg(long)]
+    cascades: Option<usize>,
     /// Ground truth.
     #[arg(long, value_enum)]
     truth: Option<Truth>,
@@ -278,7 +283,10 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     if let Some(scene) = args.scene.source() {
         c.scene = scene;
     } else if let Some(t) = args.triangles {
-        c.scene = SceneSource::Builtin { triangles: t };
+        c.scene = match c.scene {
+            SceneSource::Large { .. } => SceneSource::Large { triangles: t },
+            _ => SceneSource::Builtin { triangles: t },
+        };
     }
     c.eye = args.eye.or(c.eye);
     c.target = args.target.or(c.target);
@@ -297,6 +305,10 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
             })
             .collect::<Result<_, _>>()?;
     }
+    c.cascades = args.cascades.unwrap_or(c.cascades);
+    if args.methods.is_none() && c.cascades > 0 && !c.methods.iter().any(|m| m.cascade().is_some()) {
+        c.methods.extend(MethodSpec::CASCADED);
+    }
     if let Some(lookups) = &args.lookup {
         let mut seen = std::collections::HashSet::new();
         c.methods = lookups
@@ -314,6 +326,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     c.resume = args.resume;
     c.force = args.force;
     c.shard = shard(args)?;
+    experiment::check_cascades(&c).map_err(|e| e.to_string())?;
     Ok(c)
 }
 

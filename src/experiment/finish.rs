@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::images::{error_overlay, Picture};
 use super::report::{self, Equivalence, Summary};
 use super::rows::ConfigRow;
-use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodSpec, Runner};
+use super::{light_for, Counts, ExperimentConfig, ExperimentError, MethodSpec, Runner};
 
 /// How complete the rows of a report are.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -125,10 +125,11 @@ fn extremes(
             let light = light_for(config, runner.scene(), index);
             let (ray, focused) = runner.truths(light)?;
             let Some(truth) = ray.or(focused) else { continue };
-            let problem = runner.problem(light, config.map)?;
-            let nearest = nearest_view_depth(runner.camera(), &truth);
-            let Ok((matrix, _, _)) = runner.matrix(m, &problem, nearest) else { continue };
-            let masks = runner.masks_with(&matrix, m.lookup())?;
+            let masks = match runner.method_masks(m, light, config.single_map(), &truth) {
+                Ok((masks, ..)) => masks,
+                Err(ExperimentError::Solver(_)) => continue,
+                Err(e) => return Err(e),
+            };
             let misclassified = Counts::compare(&masks, &truth).misclassified();
             pictures.push(Picture {
                 method: m,

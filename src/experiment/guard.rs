@@ -89,6 +89,10 @@ pub(super) fn check(
     };
     texture("--screen", config.screen)?;
     texture("--map", config.map)?;
+    if config.cascades > 0 {
+        texture("--map with --cascades (the one map of equal texels)", config.single_map())?;
+    }
+    super::check_cascades(config)?;
     if matches!(config.truth, Truth::Focused4000 | Truth::Both) {
         texture("--truth (the focused 4000x4000 map)", 4000)?;
     }
@@ -98,7 +102,7 @@ pub(super) fn check(
         }
     }
     let triangles = match config.scene {
-        SceneSource::Builtin { triangles } => triangles as u64,
+        SceneSource::Builtin { triangles } | SceneSource::Large { triangles } => triangles as u64,
         SceneSource::File { .. } => 0,
     };
     if triangles > MAX_TRIANGLES {

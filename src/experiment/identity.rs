@@ -52,6 +52,7 @@ fn flag(setting: &str) -> &'static str {
         "seed" => "--seed",
         "screen" => "--screen",
         "map" => "--map",
+        "cascades" => "--cascades",
         "methods" => "--methods",
         "truth" => "--truth",
         "equivalence_configs" => "--equivalence",
@@ -83,7 +84,7 @@ impl Identity {
     /// [`ExperimentError::Io`] when the scene file cannot be read.
     pub fn of(config: &ExperimentConfig) -> Result<Self, ExperimentError> {
         let scene_sha256 = match &config.scene {
-            SceneSource::Builtin { .. } => None,
+            SceneSource::Builtin { .. } | SceneSource::Large { .. } => None,
             SceneSource::File { path, .. } => Some(sha256_file(path)?),
         };
         Ok(Self {

@@ -4,12 +4,18 @@
 //! three, named `method[-search][+lookup]` (`focused`, `optimized-argmin`,
 //! `lispsm+spsm`). A new lookup mode of the renderer becomes a method suffix
 //! by joining [`ShadowLookup::ALL`]; nothing here lists the combinations.
+//!
+//! The cascade methods of a sun (`csm`, `sdsm`, `sdsm-lispsm`,
+//! `optimized-cascades`, [`CascadeMethod`]) are the fourth choice: where the
+//! splits go and how each cascade's matrix is fitted. They are named as the
+//! engines name them rather than composed, and only run in an experiment
+//! with directional lights and `--cascades N`.
 
 use std::cmp::Ordering;
 use std::fmt;
 
 use crate::optimize::SearchStrategy;
-use crate::render::ShadowLookup;
+use crate::render::{CascadePolicy, ShadowLookup};
 use crate::{Method, Parameterization, PsmOptions};
 
 /// Matrix methods in report order (the order of `--methods`' default and of
@@ -58,8 +64,64 @@ impl Search {
     }
 }
 
+/// A cascaded sun's method ([`CascadePolicy`]): `K` maps, one per depth
+/// slice of the view, each a layer of the renderer's map array.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum CascadeMethod {
+    /// `csm`: practical (λ = 0.75) splits of the camera range within the
+    /// scene, texel-snapped focused maps ([`CascadePolicy::csm`]; Bevy's and
+    /// most engines' default).
+    Csm,
+    /// `sdsm`: logarithmic splits inside the visible depth range of the
+    /// analysis readback (Lauritzen 2010), focused maps.
+    Sdsm,
+    /// `sdsm-lispsm`: SDSM splits, LiSPSM maps.
+    SdsmLispsm,
+    /// `optimized-cascades`: SDSM splits, each cascade scene-optimized from
+    /// the same readback ([`CascadePolicy::optimized`]).
+    Optimized,
+}
+
+impl CascadeMethod {
+    /// Every cascade method in report order.
+    pub const ALL: [Self; 4] = [Self::Csm, Self::Sdsm, Self::SdsmLispsm, Self::Optimized];
+
+    /// Name on the command line and in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Csm => "csm",
+            Self::Sdsm => "sdsm",
+            Self::SdsmLispsm => "sdsm-lispsm",
+            Self::Optimized => "optimized-cascades",
+        }
+    }
+
+    /// The library method that fits each cascade's matrix.
+    #[must_use]
+    pub const fn matrix(self) -> Method {
+        match self {
+            Self::Csm => Method::FocusedSnapped,
+            Self::Sdsm => Method::Focused,
+            Self::SdsmLispsm => Method::LiSpsm,
+            Self::Optimized => Method::Optimized,
+        }
+    }
+
+    /// The frame loop's policy with `count` cascades per sun.
+    #[must_use]
+    pub fn policy(self, count: usize) -> CascadePolicy {
+        match self {
+            Self::Csm => CascadePolicy::csm(count),
+            Self::Sdsm => CascadePolicy::sdsm(count, Parameterization::Focused),
+            Self::SdsmLispsm => CascadePolicy::sdsm(count, Parameterization::LiSpsm(Default::default())),
+            Self::Optimized => CascadePolicy::optimized(count),
+        }
+    }
+}
+
 /// A method of the experiment and the viewer: a matrix method, its search
-/// and the shadow lookup its pictures are made with.
+/// and the shadow lookup its pictures are made with, or a cascade method.
 ///
 /// Written and parsed as its [name](Self::name) (also in `settings.json`).
 /// Ordered as the report lists methods: by lookup (in
@@ -70,6 +132,7 @@ pub struct MethodSpec {
     matrix: Method,
     search: Search,
     lookup: ShadowLookup,
+    cascade: Option<CascadeMethod>,
 }
 
 impl MethodSpec {
@@ -89,7 +152,18 @@ impl MethodSpec {
     pub const OPTIMIZED: Self = Self::standard(Method::Optimized);
     /// `optimized-argmin`.
     pub const OPTIMIZED_ARGMIN: Self =
-        Self { matrix: Method::Optimized, search: Search::Argmin, lookup: ShadowLookup::DepthCompare };
+        Self { matrix: Method::Optimized, search: Search::Argmin, lookup: ShadowLookup::DepthCompare, cascade: None };
+    /// `csm`.
+    pub const CSM: Self = Self::cascaded(CascadeMethod::Csm);
+    /// `sdsm`.
+    pub const SDSM: Self = Self::cascaded(CascadeMethod::Sdsm);
+    /// `sdsm-lispsm`.
+    pub const SDSM_LISPSM: Self = Self::cascaded(CascadeMethod::SdsmLispsm);
+    /// `optimized-cascades`.
+    pub const OPTIMIZED_CASCADES: Self = Self::cascaded(CascadeMethod::Optimized);
+    /// The cascade methods in report order (what `--cascades N` adds to
+    /// the default `--methods`).
+    pub const CASCADED: [Self; 4] = [Self::CSM, Self::SDSM, Self::SDSM_LISPSM, Self::OPTIMIZED_CASCADES];
 
     /// Every matrix method and search with the standard lookup, in report
     /// order (the experiment's default `--methods`).
@@ -106,7 +180,17 @@ impl MethodSpec {
 
     /// `matrix` with the paper's search and the standard lookup.
     const fn standard(matrix: Method) -> Self {
-        Self { matrix, search: Search::Paper, lookup: ShadowLookup::DepthCompare }
+        Self { matrix, search: Search::Paper, lookup: ShadowLookup::DepthCompare, cascade: None }
+    }
+
+    /// A cascade method with the standard lookup.
+    const fn cascaded(cascade: CascadeMethod) -> Self {
+        Self {
+            matrix: cascade.matrix(),
+            search: Search::Paper,
+            lookup: ShadowLookup::DepthCompare,
+            cascade: Some(cascade),
+        }
     }
 
     /// `matrix` with the paper's search and the standard lookup.
@@ -120,7 +204,8 @@ impl MethodSpec {
     /// anything but [`Search::Paper`].
     #[must_use]
     pub fn with_search(self, search: Search) -> Option<Self> {
-        (self.matrix == Method::Optimized || search == Search::Paper).then_some(Self { search, ..self })
+        let searches = self.matrix == Method::Optimized && self.cascade.is_none();
+        (searches || search == Search::Paper).then_some(Self { search, ..self })
     }
 
     /// The same matrix method and search with another lookup.
@@ -129,10 +214,16 @@ impl MethodSpec {
         Self { lookup, ..self }
     }
 
-    /// The library's matrix method.
+    /// The library's matrix method (of each cascade, for a cascade method).
     #[must_use]
     pub fn matrix(self) -> Method {
         self.matrix
+    }
+
+    /// The cascade method (`None` for a method with one map per light).
+    #[must_use]
+    pub fn cascade(self) -> Option<CascadeMethod> {
+        self.cascade
     }
 
     /// The scene optimizer's search (always [`Search::Paper`] for the other
@@ -151,9 +242,13 @@ impl MethodSpec {
 
     /// The parameterization a fixed method solves, with PSM's near plane at
     /// `nearest_view_depth` (what a depth readback supplies); `None` for
-    /// the scene-optimized method, which runs a frame loop instead.
+    /// the scene-optimized method, which runs a frame loop instead, and for
+    /// every cascade method (see [`cascade`](Self::cascade)).
     #[must_use]
     pub fn parameterization(self, nearest_view_depth: Option<f64>) -> Option<Parameterization> {
+        if self.cascade.is_some() {
+            return None;
+        }
         Some(match self.matrix {
             Method::Normal => Parameterization::Normal,
             Method::Focused => Parameterization::Focused,
@@ -185,6 +280,9 @@ impl MethodSpec {
                 (base, lookup)
             }
         };
+        if let Some(cascade) = CascadeMethod::ALL.into_iter().find(|c| c.name() == base) {
+            return Some(Self::cascaded(cascade).with_lookup(lookup));
+        }
         let (matrix, search) = match base.strip_suffix(Search::Argmin.suffix()) {
             Some(matrix) => (matrix, Search::Argmin),
             None => (base, Search::Paper),
@@ -197,23 +295,26 @@ impl MethodSpec {
     /// and the suffixes it takes, for error messages.
     #[must_use]
     pub fn valid_names() -> String {
-        let names: Vec<String> = Self::ALL.iter().map(|m| m.name()).collect();
+        let names: Vec<String> = Self::ALL.iter().chain(&Self::CASCADED).map(|m| m.name()).collect();
         let lookups: Vec<&str> =
             ShadowLookup::ALL.iter().filter(|l| **l != ShadowLookup::DepthCompare).map(|l| l.name()).collect();
         format!("{}, each optionally with +{}", names.join(", "), lookups.join(" or +"))
     }
 
-    /// The position in report order.
-    fn rank(self) -> (usize, usize, Search) {
+    /// The position in report order (cascade methods after the others).
+    fn rank(self) -> (usize, Option<CascadeMethod>, usize, Search) {
         let lookup = ShadowLookup::ALL.iter().position(|l| l.name() == self.lookup.name()).unwrap_or(usize::MAX);
         let matrix = MATRICES.iter().position(|&m| m == self.matrix).unwrap_or(usize::MAX);
-        (lookup, matrix, self.search)
+        (lookup, self.cascade, matrix, self.search)
     }
 }
 
 impl fmt::Display for MethodSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}{}", self.matrix.name(), self.search.suffix())?;
+        match self.cascade {
+            Some(c) => write!(f, "{}", c.name())?,
+            None => write!(f, "{}{}", self.matrix.name(), self.search.suffix())?,
+        }
         if self.lookup != ShadowLookup::DepthCompare {
             write!(f, "+{}", self.lookup.name())?;
         }
@@ -258,7 +359,7 @@ mod tests {
     fn names_round_trip_for_every_matrix_search_and_lookup() {
         let mut seen = std::collections::HashSet::new();
         for lookup in ShadowLookup::ALL {
-            for m in MethodSpec::ALL {
+            for m in MethodSpec::ALL.into_iter().chain(MethodSpec::CASCADED) {
                 let m = m.with_lookup(lookup);
                 let name = m.name();
                 assert_eq!(MethodSpec::parse(&name), Some(m), "{name}");
@@ -268,7 +369,32 @@ mod tests {
                 assert_eq!(serde_json::from_str::<MethodSpec>(&json).unwrap(), m);
             }
         }
-        assert_eq!(seen.len(), MethodSpec::ALL.len() * ShadowLookup::ALL.len());
+        assert_eq!(seen.len(), (MethodSpec::ALL.len() + MethodSpec::CASCADED.len()) * ShadowLookup::ALL.len());
+    }
+
+    #[test]
+    fn cascade_methods_are_named_as_the_issue_names_them_and_have_no_search() {
+        let names: Vec<String> = MethodSpec::CASCADED.iter().map(|m| m.name()).collect();
+        assert_eq!(names, ["csm", "sdsm", "sdsm-lispsm", "optimized-cascades"]);
+        for (m, c) in MethodSpec::CASCADED.into_iter().zip(CascadeMethod::ALL) {
+            assert_eq!(m.cascade(), Some(c));
+            assert_eq!(m.matrix(), c.matrix());
+            assert_eq!(m.parameterization(Some(1.0)), None, "{m}");
+            assert_eq!(m.with_search(Search::Argmin), None, "{m}");
+            assert_eq!(c.policy(3).splits.count, 3);
+        }
+        assert_eq!(MethodSpec::OPTIMIZED_CASCADES.matrix(), Method::Optimized);
+        assert_ne!(MethodSpec::OPTIMIZED_CASCADES, MethodSpec::OPTIMIZED);
+        assert_eq!(MethodSpec::parse("optimized-cascades"), Some(MethodSpec::OPTIMIZED_CASCADES));
+        for bad in ["optimized-cascades-argmin", "csm-argmin", "sdsm-focused", "cascades"] {
+            assert_eq!(MethodSpec::parse(bad), None, "{bad:?}");
+        }
+        assert!(MethodSpec::valid_names().contains("optimized-cascades"));
+        // Report order: every one-map method before the cascade methods.
+        let mut all: Vec<MethodSpec> = MethodSpec::CASCADED.iter().rev().chain(&MethodSpec::ALL).copied().collect();
+        all.sort();
+        let expected: Vec<MethodSpec> = MethodSpec::ALL.into_iter().chain(MethodSpec::CASCADED).collect();
+        assert_eq!(all, expected);
     }
 
     #[test]

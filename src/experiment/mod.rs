@@ -49,7 +49,7 @@ pub use coverage::{facet_reference, Coverage, VisibilityError};
 pub use identity::{Identity, RESULT_NEUTRAL_SETTINGS};
 pub use images::error_overlay;
 pub use merge::{merge, MergeOptions};
-pub use method::{MethodSpec, Search};
+pub use method::{CascadeMethod, MethodSpec, Search};
 pub use report::{markdown, MethodSummary, Summary};
 pub use rows::ConfigRow;
 pub use rundir::{report_dir, write_atomic};
@@ -88,6 +88,12 @@ pub enum SceneSource {
         /// Triangle budget.
         triangles: usize,
     },
+    /// The large view's procedural scene ([`large_scene`]): 40×40 objects
+    /// over a 2000-unit floor, for cascades (`--preset large`).
+    Large {
+        /// Triangle budget.
+        triangles: usize,
+    },
     /// A scene file (OBJ, glTF 2.0) with how to orient, scale and floor it.
     File {
         /// The file.
@@ -122,8 +128,16 @@ pub struct ExperimentConfig {
     pub seed: u64,
     /// Square screen resolution.
     pub screen: u32,
-    /// Square shadow-map resolution.
+    /// Square shadow-map resolution (of each cascade when `cascades` > 0;
+    /// see [`single_map`](Self::single_map)).
     pub map: u32,
+    /// Cascades per sun of the cascade methods ([`CascadeMethod`]; 0: none).
+    /// At equal total texels: each cascade has `map²` texels, the methods
+    /// with one map per light [`single_map`](Self::single_map)`²` =
+    /// `(map·√cascades)²`. Needs directional lights. Runs from before the
+    /// field read as 0 (and a run without cascades records none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub cascades: usize,
     /// Methods to compare.
     pub methods: Vec<MethodSpec>,
     /// Ground truth.
@@ -155,6 +169,12 @@ pub struct ExperimentConfig {
     pub force: bool,
 }
 
+/// `serde`'s `skip_serializing_if` for counts that default to 0.
+#[allow(clippy::trivially_copy_pass_by_ref)]
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
 /// Named presets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Preset {
@@ -164,6 +184,11 @@ pub enum Preset {
     Default,
     /// The paper's setting: 1.1M triangles, 500 point lights, 750² screen, 400² maps.
     Paper,
+    /// Cascaded suns on a large view: the eye 1.7 units above a 2000-unit
+    /// floor, far plane 1500 ([`SceneSource::Large`]); 6 directional
+    /// lights, 4 cascades of 1024² against one 2048² map, the cascade
+    /// methods with focused and LiSPSM.
+    Large,
 }
 
 impl ExperimentConfig {
@@ -182,6 +207,7 @@ impl ExperimentConfig {
             screen: 512,
             map: 400,
             methods: MethodSpec::ALL.to_vec(),
+            cascades: 0,
             truth: Truth::Both,
             max_optimize_frames: 12,
             equivalence_configs: 10,
@@ -215,8 +241,39 @@ impl ExperimentConfig {
                 equivalence_configs: 50,
                 ..base
             },
+            Preset::Large => Self {
+                scene: SceneSource::Large { triangles: 300_000 },
+                light: LightKind::Directional,
+                configs: 6,
+                screen: 512,
+                map: 1024,
+                cascades: 4,
+                methods: [MethodSpec::FOCUSED, MethodSpec::LISPSM].into_iter().chain(MethodSpec::CASCADED).collect(),
+                truth: Truth::RayCast,
+                equivalence_configs: 0,
+                ..base
+            },
         }
     }
+
+    /// The square map of a method with one map per light: `map` without
+    /// cascades, else the size with the texels of `cascades` maps of
+    /// `map²`, `round(map·√cascades)`.
+    #[must_use]
+    pub fn single_map(&self) -> u32 {
+        if self.cascades == 0 {
+            return self.map;
+        }
+        (f64::from(self.map) * (self.cascades as f64).sqrt()).round() as u32
+    }
+}
+
+/// The large view's scene ([`SceneSource::Large`]): the procedural scene
+/// spread over a 2000-unit floor, 40×40 objects, so that a view from 1.7
+/// units above the floor reaches 1500 units deep through it.
+#[must_use]
+pub fn large_scene(triangles: usize) -> crate::mesh::ProceduralScene {
+    crate::mesh::ProceduralScene { triangle_budget: triangles, objects_per_side: 40, floor_size: 2000.0, seed: 2026 }
 }
 
 /// Why an experiment stopped.
@@ -290,6 +347,14 @@ pub enum ExperimentError {
         /// Configurations run.
         configs: usize,
     },
+    /// A cascade method, or `--cascades`, in a run that cannot cascade.
+    #[error("{what}: {reason}")]
+    Cascades {
+        /// The method or flag at fault.
+        what: String,
+        /// Why.
+        reason: &'static str,
+    },
     /// `merge` found configurations missing or run by more than one shard.
     #[error("merge: {}{}{}", list("missing configurations", missing), if !missing.is_empty() && !duplicated.is_empty() { "; " } else { "" }, list("configurations in more than one directory", duplicated))]
     Incomplete {
@@ -348,6 +413,7 @@ pub fn load_scene_with_report(source: &SceneSource) -> Result<(Scene, Option<Loa
         SceneSource::Builtin { triangles } => {
             Ok((crate::mesh::ProceduralScene { triangle_budget: *triangles, ..Default::default() }.build(), None))
         }
+        SceneSource::Large { triangles } => Ok((large_scene(*triangles).build(), None)),
         SceneSource::File { path, options } => crate::mesh::load_scene_file(path, options)
             .map(|(scene, report)| (scene, Some(report)))
             .map_err(|e| ExperimentError::Scene(e.to_string())),
@@ -370,6 +436,14 @@ pub fn camera_for(config: &ExperimentConfig, scene: &Scene) -> Result<Camera, Ex
             f.near,
             f.far,
         )?);
+    }
+    if matches!(config.scene, SceneSource::Large { .. }) {
+        // 1.7 units above the floor, 240 units inside its front edge,
+        // looking across it: near 0.1, far 1500.
+        let eye = config.eye.unwrap_or(DVec3::new(3.0, 1.7, 760.0));
+        let target = config.target.unwrap_or(eye + DVec3::new(0.05, -0.04, -1.0));
+        let fov = config.fov_y_degrees.to_radians();
+        return Ok(Camera::look_at(eye, target, DVec3::Y, fov, UVec2::splat(config.screen), 0.1, 1500.0)?);
     }
     let bounds = scene.bounds().scene();
     let center = bounds.center();
@@ -418,8 +492,12 @@ pub fn light_for(config: &ExperimentConfig, scene: &Scene, index: usize) -> Ligh
 /// One method's result on one configuration.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MethodResult {
-    /// The matrix used (`None` when the method failed).
+    /// The matrix used (`None` when the method failed; a cascade method's
+    /// first cascade).
     pub matrix: Option<LightMatrix>,
+    /// A cascade method's cascades in order, nearest first (empty for the
+    /// other methods).
+    pub cascades: Vec<LightMatrix>,
     /// Counts against the truth.
     pub counts: Option<Counts>,
     /// Visibility error against the coverage truth (when it ran).
@@ -514,6 +592,7 @@ impl<'a> Runner<'a> {
                 config.coverage_samples
             )));
         }
+        check_cascades(config)?;
         let scene = load_scene(&config.scene)?;
         let camera = camera_for(config, &scene)?;
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
@@ -544,6 +623,8 @@ impl<'a> Runner<'a> {
 
     /// Renders the camera view with `matrix` (masks included) and waits for it.
     fn render_view(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<(), ExperimentError> {
+        // One map per light: no cascades left over from a cascade method.
+        self.renderer.set_cascades(0, None);
         let lights = std::slice::from_ref(matrix);
         let report =
             self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup })?;
@@ -632,6 +713,7 @@ impl<'a> Runner<'a> {
     ) -> Result<(LightMatrix, usize, String), ExperimentError> {
         let optimize = OptimizeOptions { strategy, ..Default::default() };
         let options = LoopOptions { optimize, lookup, ..Default::default() };
+        self.renderer.set_cascades(0, None);
         let mut shadows = ShadowLoop::new(LoopPolicy::Optimized, 1, options)?;
         let view = LoopView {
             camera: problem.camera(),
@@ -642,6 +724,58 @@ impl<'a> Runner<'a> {
         let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
         let note = settled.fallbacks[0].map(rows::fallback_note).unwrap_or_default();
         Ok((settled.matrices[0], settled.frames, note))
+    }
+
+    /// A cascade method's frame loop at this configuration ([`ShadowLoop`]
+    /// with [`LoopPolicy::Cascaded`], `config.cascades` maps of `config.map`²
+    /// for the sun), settled at its view; then its masks with the sun's
+    /// cascade bits folded into bit 0 ([`fold_cascade_masks`]). Returns the
+    /// masks, the cascades' matrices, the frames and a note.
+    fn cascaded_masks(
+        &mut self,
+        cascade: CascadeMethod,
+        light: Light,
+        lookup: ShadowLookup,
+    ) -> Result<(ShadowMasks, Vec<LightMatrix>, usize, String), ExperimentError> {
+        let count = self.config.cascades;
+        let options = LoopOptions { lookup, ..Default::default() };
+        let mut shadows = ShadowLoop::new(LoopPolicy::Cascaded(cascade.policy(count)), 1, options)?;
+        let lights = [light];
+        let view = LoopView {
+            camera: &self.camera,
+            lights: &lights,
+            bounds: self.scene.bounds(),
+            map: ShadowMapSize::square(self.config.map),
+        };
+        let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
+        // The loop left the renderer's cascades marked for these matrices.
+        let frame = Frame { camera: &self.camera, lights: &settled.matrices, masks: true, analysis: None, lookup };
+        let report = self.renderer.render(&frame)?;
+        self.renderer.wait_for(&report.submission)?;
+        let masks = fold_cascade_masks(&self.renderer.read_masks()?, &[0, settled.matrices.len()]);
+        let note = settled.fallbacks[0].map(rows::fallback_note).unwrap_or_default();
+        Ok((masks, settled.matrices, settled.frames, note))
+    }
+
+    /// The masks of `method` for `light` with `truth`'s nearest depth for
+    /// PSM: one map of `map`² (cascade methods: their cascades, of
+    /// `config.map`² each). Returns the masks, the matrices, the frames
+    /// and a note; the solver's refusals as [`ExperimentError::Solver`].
+    pub(super) fn method_masks(
+        &mut self,
+        method: MethodSpec,
+        light: Light,
+        map: u32,
+        truth: &ShadowMasks,
+    ) -> Result<(ShadowMasks, Vec<LightMatrix>, usize, String), ExperimentError> {
+        if let Some(cascade) = method.cascade() {
+            return self.cascaded_masks(cascade, light, method.lookup());
+        }
+        let nearest = nearest_view_depth(&self.camera, truth);
+        let problem = self.problem(light, map)?;
+        let (m, frames, note) = self.matrix(method, &problem, nearest)?;
+        let masks = self.masks_with(&m, method.lookup())?;
+        Ok((masks, vec![m], frames, note))
     }
 
     /// Runs configuration `index`.
@@ -667,14 +801,11 @@ impl<'a> Runner<'a> {
             _ => None,
         };
         let truth = ray.or(focused_truth).ok_or_else(|| ExperimentError::Config("no ground truth".into()))?;
-        // What a depth readback supplies to PSM: the nearest visible depth.
-        let nearest = nearest_view_depth(&self.camera, &truth);
-        let problem = self.problem(light, self.config.map)?;
         let mut results = Vec::new();
         for &method in &self.config.methods {
-            let result = match self.matrix(method, &problem, nearest) {
-                Ok((m, frames, note)) => {
-                    let masks = self.masks_with(&m, method.lookup())?;
+            // What a depth readback supplies to PSM: the nearest visible depth.
+            let result = match self.method_masks(method, light, self.config.single_map(), &truth) {
+                Ok((masks, matrices, frames, note)) => {
                     // `+aaN`: the renderer's occlusion words against the truth
                     // of the same N sub-samples; others: the shadow bit.
                     let visibility = match (coverage.as_ref(), samples, method.lookup()) {
@@ -701,17 +832,24 @@ impl<'a> Runner<'a> {
                         }
                         _ => note,
                     };
+                    let cascades = if method.cascade().is_some() { matrices.clone() } else { Vec::new() };
                     MethodResult {
-                        matrix: Some(m),
+                        matrix: matrices.first().copied(),
+                        cascades,
                         counts: Some(Counts::compare(&masks, &truth)),
                         visibility,
                         frames,
                         note,
                     }
                 }
-                Err(ExperimentError::Solver(e)) => {
-                    MethodResult { matrix: None, counts: None, visibility: None, frames: 0, note: e.to_string() }
-                }
+                Err(ExperimentError::Solver(e)) => MethodResult {
+                    matrix: None,
+                    cascades: Vec::new(),
+                    counts: None,
+                    visibility: None,
+                    frames: 0,
+                    note: e.to_string(),
+                },
                 Err(e) => return Err(e),
             };
             results.push((method, result));
@@ -731,14 +869,66 @@ impl<'a> Runner<'a> {
             let light = light_for(self.config, &self.scene, index);
             let (ray, focused_truth) = self.truths(light)?;
             let Some(truth) = ray.or(focused_truth) else { continue };
-            let nearest = nearest_view_depth(&self.camera, &truth);
-            let problem = self.problem(light, map)?;
-            if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
-                total += Counts::compare(&self.masks_with(&m, method.lookup())?, &truth).misclassified() as f64;
-                n += 1;
+            match self.method_masks(method, light, map, &truth) {
+                Ok((masks, ..)) => {
+                    total += Counts::compare(&masks, &truth).misclassified() as f64;
+                    n += 1;
+                }
+                Err(ExperimentError::Solver(_)) => {}
+                Err(e) => return Err(e),
             }
         }
         Ok(if n == 0 { f64::NAN } else { total / n as f64 })
+    }
+}
+
+/// Checks the cascade settings: cascade methods need directional lights
+/// and `cascades` in `1..=`[`MAX_CASCADES`](crate::cascade::MAX_CASCADES)
+/// (at most [`MAX_LIGHTS`](crate::MAX_LIGHTS) maps), with the standard
+/// lookup; `cascades` > 0 needs directional lights.
+///
+/// # Errors
+/// [`ExperimentError::Cascades`] naming the method or flag.
+pub fn check_cascades(config: &ExperimentConfig) -> Result<(), ExperimentError> {
+    let refuse = |what: String, reason| Err(ExperimentError::Cascades { what, reason });
+    let max = crate::cascade::MAX_CASCADES.min(crate::MAX_LIGHTS);
+    if config.cascades > max {
+        return refuse(format!("--cascades {}", config.cascades), "at most 8 cascades per sun");
+    }
+    if config.cascades > 0 && config.light != LightKind::Directional {
+        return refuse(format!("--cascades {}", config.cascades), "cascades are for suns: add --light directional");
+    }
+    for m in config.methods.iter().filter(|m| m.cascade().is_some()) {
+        if config.light != LightKind::Directional {
+            return refuse(format!("--methods {m}"), "a cascade method needs --light directional");
+        }
+        if config.cascades == 0 {
+            return refuse(format!("--methods {m}"), "a cascade method needs --cascades N (1 to 8)");
+        }
+        if m.lookup() != ShadowLookup::DepthCompare {
+            return refuse(format!("--methods {m}"), "cascade methods run with the standard lookup only");
+        }
+    }
+    Ok(())
+}
+
+/// A cascaded sun's masks with its cascades folded into one light: light
+/// `i` of the result is map slots `slots[i]..slots[i + 1]` of `masks`,
+/// shadowed where one of them is and facing where one of them is (the
+/// renderer looks a cascade up only where it owns the pixel's depth, so at
+/// most one of each sun's bits is set: the per-pixel cascade's).
+#[must_use]
+pub fn fold_cascade_masks(masks: &ShadowMasks, slots: &[usize]) -> ShadowMasks {
+    let fold = |bits: u32| {
+        slots.windows(2).enumerate().fold(0u32, |out, (i, w)| {
+            let range = ((1u64 << w[1]) - (1u64 << w[0])) as u32;
+            out | (u32::from(bits & range != 0) << i)
+        })
+    };
+    ShadowMasks {
+        shadow: masks.shadow.iter().map(|&b| fold(b)).collect(),
+        facing: masks.facing.iter().map(|&b| fold(b)).collect(),
+        ..masks.clone()
     }
 }
 

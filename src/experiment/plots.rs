@@ -10,7 +10,7 @@ use std::sync::Once;
 use image::RgbImage;
 use plotters::prelude::*;
 
-use super::method::Search;
+use super::method::{CascadeMethod, Search};
 use super::report::Summary;
 use super::rows::ConfigRow;
 use super::{ExperimentConfig, ExperimentError, MethodSpec};
@@ -36,15 +36,19 @@ fn register_font() {
 /// for each lookup further along [`ShadowLookup::ALL`] (`+spsm`: half,
 /// the next a third).
 pub(super) fn color(method: MethodSpec) -> RGBColor {
-    let RGBColor(r, g, b) = match (method.matrix(), method.search()) {
-        (Method::Normal, _) => RGBColor(120, 120, 120),
-        (Method::Focused, _) => RGBColor(31, 119, 180),
-        (Method::FocusedSnapped, _) => RGBColor(23, 190, 207),
-        (Method::LiSpsm, _) => RGBColor(44, 160, 44),
-        (Method::Psm, _) => RGBColor(148, 103, 189),
-        (Method::PlaneOptimal, _) => RGBColor(255, 127, 14),
-        (_, Search::Paper) => RGBColor(214, 39, 40),
-        (_, Search::Argmin) => RGBColor(227, 119, 194),
+    let RGBColor(r, g, b) = match (method.cascade(), method.matrix(), method.search()) {
+        (Some(CascadeMethod::Csm), ..) => RGBColor(140, 86, 75),
+        (Some(CascadeMethod::Sdsm), ..) => RGBColor(188, 189, 34),
+        (Some(CascadeMethod::SdsmLispsm), ..) => RGBColor(127, 127, 30),
+        (Some(CascadeMethod::Optimized), ..) => RGBColor(90, 0, 20),
+        (_, Method::Normal, _) => RGBColor(120, 120, 120),
+        (_, Method::Focused, _) => RGBColor(31, 119, 180),
+        (_, Method::FocusedSnapped, _) => RGBColor(23, 190, 207),
+        (_, Method::LiSpsm, _) => RGBColor(44, 160, 44),
+        (_, Method::Psm, _) => RGBColor(148, 103, 189),
+        (_, Method::PlaneOptimal, _) => RGBColor(255, 127, 14),
+        (_, _, Search::Paper) => RGBColor(214, 39, 40),
+        (_, _, Search::Argmin) => RGBColor(227, 119, 194),
     };
     let darker = ShadowLookup::ALL.iter().position(|l| l.name() == method.lookup().name()).unwrap_or(0);
     let shade = |c: u8| c / (1 + darker.min(7) as u8);

@@ -240,6 +240,19 @@ pub(super) fn write_shard(
     write_atomic(&dir.join("report.md"), md.as_bytes())
 }
 
+/// The maps of the run: `MxM maps`, or with cascades, at equal total
+/// texels, the cascade methods' and the others' sizes.
+fn maps_phrase(config: &ExperimentConfig) -> String {
+    let (m, s) = (config.map, config.single_map());
+    if config.cascades == 0 {
+        return format!("{m}x{m} maps");
+    }
+    format!(
+        "{} cascades of {m}x{m} per sun for the cascade methods and one {s}x{s} map for the others (equal total texels)",
+        config.cascades
+    )
+}
+
 /// `report.md`: the paper's Table 1 layout, then the rest.
 #[must_use]
 pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(MethodSpec, String, PathBuf)]) -> String {
@@ -262,14 +275,13 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
     let configs = summary.methods.first().map_or(0, |m| m.configs + m.failures);
     let _ = writeln!(
         md,
-        "{configs} configurations ({} lights on a hemisphere of radius {} scene diagonals, seed {}), {}x{} screen, {}x{} maps, scene {}, truth {}. Run time {:.1} s.\n",
+        "{configs} configurations ({} lights on a hemisphere of radius {} scene diagonals, seed {}), {}x{} screen, {}, scene {}, truth {}. Run time {:.1} s.\n",
         serde_json::to_string(&config.light).unwrap_or_default().trim_matches('"'),
         config.light_distance,
         config.seed,
         config.screen,
         config.screen,
-        config.map,
-        config.map,
+        maps_phrase(config),
         serde_json::to_string(&config.scene).unwrap_or_default(),
         serde_json::to_string(&config.truth).unwrap_or_default().trim_matches('"'),
         summary.elapsed.as_secs_f64()

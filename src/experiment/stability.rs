@@ -51,6 +51,7 @@ impl CameraPath {
         let frames = match preset {
             Preset::Quick => 12,
             Preset::Default | Preset::Paper => 120,
+            Preset::Large => 60,
         };
         Self { frames, walk: 0.04, turn_degrees: 12.0 }
     }
@@ -261,6 +262,12 @@ pub fn measure_variants(
 ) -> Result<Vec<StabilityRow>, ExperimentError> {
     if variants.is_empty() {
         return Err(ExperimentError::Config("no method to measure".into()));
+    }
+    if let Some(v) = variants.iter().find(|v| v.method.cascade().is_some()) {
+        return Err(ExperimentError::Cascades {
+            what: format!("--stability with {}", v.method),
+            reason: "the stability walk measures methods with one map per light (examples/cascades.rs --walk measures cascades)",
+        });
     }
     let config = ExperimentConfig { truth: Truth::RayCast, ..config.clone() };
     let mut runner = Runner::new(&config, device, queue)?;

@@ -575,6 +575,9 @@ impl Viewer {
 
 /// The frame loop of `method` for `lights` lights.
 fn new_loop(method: MethodSpec, lights: usize, schedule: ScheduleOptions) -> Result<ShadowLoop, ViewError> {
+    if method.cascade().is_some() {
+        return Err(ViewError::Config(format!("{method}: the viewer does not draw cascaded suns yet")));
+    }
     let policy = method.parameterization(None).map_or(LoopPolicy::Optimized, LoopPolicy::Fixed);
     let strategy = method.search().strategy();
     let optimize = OptimizeOptions { strategy, ..Default::default() };
