@@ -553,3 +553,51 @@ fn main() -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(args: &[&str]) -> Result<ExperimentConfig, String> {
+        let cli = Cli::try_parse_from(["lixel", "experiment"].iter().chain(args)).map_err(|e| e.to_string())?;
+        match cli.command {
+            Command::Experiment(args) => experiment_config(&args),
+            _ => Err("not an experiment".into()),
+        }
+    }
+
+    #[test]
+    fn cascades_add_the_cascade_methods_at_equal_texels() {
+        let c = config(&["--light", "directional", "--cascades", "4", "--map", "512"]).unwrap();
+        assert_eq!((c.cascades, c.map, c.single_map()), (4, 512, 1024));
+        for m in MethodSpec::ALL.into_iter().chain(MethodSpec::CASCADED) {
+            assert!(c.methods.contains(&m), "{m} missing");
+        }
+        let c = config(&["--light", "directional", "--cascades", "2", "--methods", "csm,optimized-cascades,focused"])
+            .unwrap();
+        assert_eq!(c.methods, [MethodSpec::CSM, MethodSpec::OPTIMIZED_CASCADES, MethodSpec::FOCUSED]);
+        let c = config(&["--preset", "large", "--triangles", "5000"]).unwrap();
+        assert_eq!(c.scene, SceneSource::Large { triangles: 5000 });
+        assert_eq!(c.methods.iter().filter(|m| m.cascade().is_some()).count(), 4);
+        let c = config(&["--preset", "quick"]).unwrap();
+        assert_eq!(c.cascades, 0);
+        assert!(c.methods.iter().all(|m| m.cascade().is_none()));
+    }
+
+    #[test]
+    fn cascade_methods_without_suns_or_cascades_are_refused() {
+        let e = config(&["--methods", "sdsm"]).unwrap_err();
+        assert!(e.contains("--methods sdsm") && e.contains("--light directional"), "{e}");
+        let e = config(&["--light", "directional", "--methods", "csm"]).unwrap_err();
+        assert!(e.contains("--cascades N"), "{e}");
+        let e = config(&["--cascades", "2"]).unwrap_err();
+        assert!(e.contains("--cascades 2") && e.contains("directional"), "{e}");
+        let e = config(&["--light", "directional", "--cascades", "9"]).unwrap_err();
+        assert!(e.contains("at most 8"), "{e}");
+        let e = config(&["--light", "directional", "--cascades", "2", "--lookup", "standard,spsm"]).unwrap_err();
+        assert!(e.contains("standard lookup"), "{e}");
+        assert!(config(&["--light", "directional", "--cascades", "x"]).is_err());
+        let e = config(&["--methods", "optimized-cascades-argmin"]).unwrap_err();
+        assert!(e.contains("unknown method"), "{e}");
+    }
+}

@@ -1004,3 +1004,29 @@ pub fn run(
         finish::Completeness { adapter: crate::render::device::describe(&device.adapter_info()), ..Default::default() };
     finish::finish(&mut runner, config, dir.path(), &rows, &completeness, warnings, started)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folding_cascades_gives_one_bit_per_sun() {
+        // Slots: a sun in 0..2, a point light in 2, a sun in 3..6.
+        let slots = [0, 2, 3, 6];
+        let masks = ShadowMasks {
+            width: 3,
+            height: 1,
+            depth: vec![0.5; 3],
+            shadow: vec![0b000_0_10, 0b100_1_00, 0],
+            facing: vec![0b010_0_10, 0b100_1_01, 0b001_0_00],
+        };
+        let folded = fold_cascade_masks(&masks, &slots);
+        assert_eq!(folded.shadow, [0b001, 0b110, 0]);
+        assert_eq!(folded.facing, [0b101, 0b111, 0b100]);
+        assert_eq!((folded.width, folded.depth.len()), (3, 3));
+        assert_eq!(
+            ExperimentConfig { cascades: 3, map: 100, ..ExperimentConfig::preset(Preset::Quick) }.single_map(),
+            173
+        );
+    }
+}
