@@ -124,6 +124,9 @@ pub(super) struct CascadeState {
     optimizers: Vec<CascadeOptimizer>,
     /// Per light: world points of the last readback's pixels it shadows.
     seen: Vec<Vec<DVec3>>,
+    /// Per light: the slice cameras (one per cascade) of the last readback
+    /// its cascades were optimized from.
+    fitted: Vec<Vec<crate::Camera>>,
     optimize: OptimizeOptions,
 }
 
@@ -178,6 +181,30 @@ fn holds(matrix: &LightMatrix, camera: &crate::Camera, (lo, hi): (f64, f64), see
     })
 }
 
+/// Whether an optimized cascade can still stand for the cascade's slice
+/// now: the slice's visible receivers (`body`, the vertices of `V_k ∩ R`
+/// of the frame's slice `k`) lie in its map, or all of them lay inside the
+/// slice the readback it was fitted to sampled (`fitted`, that slice's
+/// camera). Otherwise the camera has moved (or turned) onto receivers no
+/// readback has seen in this slice — walking up to an object puts its
+/// near side in cascade 0 — and the optimizer, which fits what was seen,
+/// may have left them out of the map: the cascade falls back to its
+/// focused matrix until a readback from the new view. Both tests are of
+/// convex bodies (the map's coverage and a slice frustum), so the vertices
+/// decide; `SLACK` (2% of the map's or the frustum's half-width, of its
+/// depth range) absorbs a frame's worth of drift.
+fn still_fits(matrix: &LightMatrix, body: &[DVec3], fitted: Option<&crate::Camera>) -> bool {
+    const SLACK: f64 = 0.02;
+    let inside = |camera: &crate::Camera, p: DVec3| {
+        let c = camera.clip_from_world() * p.extend(1.0);
+        c.w > 0.0 && {
+            let n = c.truncate() / c.w;
+            n.x.abs() <= 1.0 + SLACK && n.y.abs() <= 1.0 + SLACK && (-SLACK..=1.0 + SLACK).contains(&n.z)
+        }
+    };
+    body.iter().all(|&p| matrix.covers(p, SLACK)) || fitted.is_some_and(|c| body.iter().all(|&p| inside(c, p)))
+}
+
 impl CascadeState {
     pub(super) fn new(policy: &CascadePolicy, lights: usize, optimize: OptimizeOptions) -> crate::Result<Self> {
         policy.splits.validate()?;
@@ -186,7 +213,7 @@ impl CascadeState {
             SplitPlacement::Sdsm { hysteresis } => Some(SplitTracker::new(policy.splits, hysteresis)?),
         };
         let optimizers = (0..lights).map(|_| CascadeOptimizer::new(policy.splits.count, &optimize)).collect();
-        Ok(Self { tracker, optimizers, seen: vec![Vec::new(); lights], optimize })
+        Ok(Self { tracker, optimizers, seen: vec![Vec::new(); lights], fitted: vec![Vec::new(); lights], optimize })
     }
 
     fn reset_optimizers(&mut self, count: usize) {
@@ -252,9 +279,11 @@ impl CascadeState {
                 .map(|(x, y)| world_from_screen.project_point3(readback.screen_point(x, y)))
                 .collect();
             // The samples belong to the camera the pass was rendered with.
+            let mut fitted = Vec::new();
             let samples = ShadowProblem::new(readback.camera, light, view.bounds, view.map).and_then(|problem| {
                 let splits = self.splits(policy, &problem)?;
                 let cascades = CascadeProblems::new(&problem, splits)?;
+                fitted = cascades.problems().iter().map(|p| *p.camera()).collect();
                 CascadeOptimizer::samples(&cascades, &input, i as u32, &options)
             });
             let Ok(samples) = samples else {
@@ -272,6 +301,9 @@ impl CascadeState {
                     Err(_) => ok = false,
                 }
             }
+            // A cascade whose optimization failed keeps a matrix of an older
+            // readback: then only its map's own coverage can vouch for it.
+            self.fitted[i] = if ok { fitted } else { Vec::new() };
             if ok {
                 update.optimized |= 1 << i;
             } else {
@@ -313,8 +345,12 @@ impl CascadeState {
             let cascades = CascadeProblems::new(&problem, s.clone())?;
             for (k, slice) in cascades.problems().iter().enumerate() {
                 let seen = &self.seen[i];
+                let fits = |m: &LightMatrix| {
+                    holds(m, view.camera, s.slice(k), seen)
+                        && still_fits(m, slice.visible_receiver_body().vertices(), self.fitted[i].get(k))
+                };
                 matrices.push(match (&policy.matrices, self.optimizers[i].matrix(k)) {
-                    (CascadeMatrices::Optimized, Some(m)) if holds(m, view.camera, s.slice(k), seen) => *m,
+                    (CascadeMatrices::Optimized, Some(m)) if fits(m) => *m,
                     _ => slice.solve(&fixed)?,
                 });
             }
