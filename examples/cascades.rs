@@ -208,12 +208,18 @@ fn walk(
     k: usize,
     frames: usize,
 ) -> Result<(), String> {
-    let names = ["csm", "sdsm", "optimized-cascades"];
+    let all = ["csm", "sdsm", "optimized-cascades"];
+    // CASCADES_ONLY=NAME: that method alone (for debugging; no ratios).
+    let only = std::env::var("CASCADES_ONLY").ok();
+    let names: Vec<&str> = all.into_iter().filter(|n| only.as_deref().is_none_or(|o| o == *n)).collect();
     let mut loops = Vec::new();
     let mut renderers = Vec::new();
-    for policy in
-        [CascadePolicy::csm(k), CascadePolicy::sdsm(k, Parameterization::Focused), CascadePolicy::optimized(k)]
-    {
+    let policy_of = |name: &str| match name {
+        "csm" => CascadePolicy::csm(k),
+        "sdsm" => CascadePolicy::sdsm(k, Parameterization::Focused),
+        _ => CascadePolicy::optimized(k),
+    };
+    for policy in names.iter().map(|n| policy_of(n)) {
         renderers
             .push(Renderer::new(device, queue, view.scene, RendererOptions::default()).map_err(|e| e.to_string())?);
         let renderer = renderers.last_mut().ok_or("no renderer")?;
@@ -246,8 +252,34 @@ fn walk(
             let masks = render_masks(renderer, &camera, &done.matrices, true)?;
             misclassified[m] += masks.misclassified(&truth, 0).unwrap_or(0);
             if std::env::var_os("CASCADES_DEBUG").is_some() {
+                // Per cascade: pixels it owns, and whether its matrix is the
+                // slice's focused one (F) or another (O).
+                let raw = renderer.read_masks().map_err(|e| e.to_string())?;
+                let owned: Vec<usize> = (0..k).map(|c| raw.facing.iter().filter(|&&b| b == 1 << c).count()).collect();
+                let problem =
+                    ShadowProblem::new(camera, view.light, view.scene.bounds(), view.map).map_err(|e| e.to_string())?;
+                let kinds: String = match &done.splits {
+                    Some(s) => lixel::cascade::CascadeProblems::new(&problem, s.clone())
+                        .map_err(|e| e.to_string())?
+                        .solve(&Parameterization::Focused)
+                        .iter()
+                        .zip(&done.matrices)
+                        .map(|(f, m)| if f.as_ref().ok() == Some(m) { 'F' } else { 'O' })
+                        .collect(),
+                    None => String::new(),
+                };
+                let (mut false_shadow, mut false_lit) = (0, 0);
+                for i in 0..truth.shadow.len() {
+                    if truth.visible(i) && truth.facing[i] & 1 == 1 {
+                        match (truth.shadow[i] & 1, masks.shadow[i] & 1) {
+                            (0, 1) => false_shadow += 1,
+                            (1, 0) => false_lit += 1,
+                            _ => {}
+                        }
+                    }
+                }
                 eprintln!(
-                    "frame {f} {}: misclassified {}, readback {:?}, optimized {:#b} failed {:#b} moved {} splits {:?}",
+                    "frame {f} {}: misclassified {} (false shadow {false_shadow}, false lit {false_lit}), cascades {kinds} own {owned:?}, readback {:?}, optimized {:#b} failed {:#b} moved {} splits {:?}",
                     names[m],
                     masks.misclassified(&truth, 0).unwrap_or(0),
                     done.readback.map(|r| r.frame),

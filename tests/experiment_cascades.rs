@@ -17,7 +17,11 @@ fn config(out: &std::path::Path) -> ExperimentConfig {
         screen: 96,
         map: 128,
         cascades: 2,
-        methods: [MethodSpec::FOCUSED].into_iter().chain(MethodSpec::CASCADED).collect(),
+        methods: [MethodSpec::FOCUSED]
+            .into_iter()
+            .chain(MethodSpec::CASCADED)
+            .chain([MethodSpec::SDSM.with_lookup(lixel::render::ShadowLookup::parse("aa8").unwrap())])
+            .collect(),
         truth: Truth::RayCast,
         max_optimize_frames: 4,
         equivalence_configs: 0,
@@ -41,7 +45,7 @@ fn two_cascades_run_every_cascade_method_at_equal_texels_deterministically() {
     assert_eq!(c.single_map(), 181, "one map of (128·√2)²");
     let summary = experiment::run(&c, &device, &queue, &mut |_| {}).unwrap();
     let names: Vec<String> = c.methods.iter().map(|m| m.name()).collect();
-    assert_eq!(names, ["focused", "csm", "sdsm", "sdsm-lispsm", "optimized-cascades"]);
+    assert_eq!(names, ["focused", "csm", "sdsm", "sdsm-lispsm", "optimized-cascades", "sdsm+aa8"]);
 
     let summary_rows = csv_rows(&first.join("summary.csv"));
     for name in &names {
@@ -116,9 +120,10 @@ fn cascade_methods_need_suns_and_a_cascade_count() {
     assert!(cascades(experiment::check_cascades(&point_cascades)).contains("--cascades 2"));
     let nine = ExperimentConfig { cascades: 9, ..config(out) };
     assert!(cascades(experiment::check_cascades(&nine)).contains("at most 8"));
+    // Every lookup honours the cascade choice (tests/render_cascades.rs).
     let spsm = lixel::render::ShadowLookup::parse("spsm").unwrap();
     let lookup = ExperimentConfig { methods: vec![MethodSpec::CSM.with_lookup(spsm)], ..config(out) };
-    assert!(cascades(experiment::check_cascades(&lookup)).contains("standard lookup"));
+    experiment::check_cascades(&lookup).unwrap();
     experiment::check_cascades(&config(out)).unwrap();
     // Without cascade methods a run records no cascades (old settings read the same).
     let plain = ExperimentConfig::preset(Preset::Quick);

@@ -335,3 +335,54 @@ fn the_frame_loop_drives_cascades() {
     eprintln!("misclassified: csm {csm_errors}, optimized cascades {optimized_errors} (settled in {})", settled.frames);
     assert!(optimized_errors <= csm_errors * 3 / 2 + 20, "optimized {optimized_errors} vs csm {csm_errors}");
 }
+
+/// Every lookup mode honours the per-pixel cascade choice: SPSM and SGSM
+/// shade through `shade` (common.wgsl) and so set the same facing bits as
+/// the depth compare, and the antialiased passes (`aa_passes.wgsl`, once per
+/// map slot) compute a cascade's occlusion words only where the camera pass
+/// gave that cascade the pixel's facing bit, so OR-ing a sun's slots gives
+/// the owning cascade's words.
+#[test]
+fn every_lookup_honours_the_cascade_choice() {
+    use lixel::render::subpixel::AaSamples;
+    use lixel::render::ShadowLookup;
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let size = 96;
+    let (camera, sun) = loop_view(size);
+    let problem = ShadowProblem::new(camera, sun, scene.bounds(), ShadowMapSize::square(128)).unwrap();
+    let policy = CascadeSplits { count: 3, scheme: SplitScheme::Practical { lambda: 0.75 }, overlap: 0.1 };
+    let cascades = CascadeProblems::new(&problem, policy.for_problem(&problem).unwrap()).unwrap();
+    let matrices: Vec<_> = cascades.solve(&Parameterization::Focused).into_iter().collect::<Result<_, _>>().unwrap();
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    renderer.set_cascades(0, Some(cascades.splits()));
+    let render = |renderer: &mut Renderer, lookup: ShadowLookup| {
+        renderer.render(&Frame { camera: &camera, lights: &matrices, masks: true, analysis: None, lookup }).unwrap();
+        renderer.read_masks().unwrap()
+    };
+    let standard = render(&mut renderer, ShadowLookup::DepthCompare);
+    let used: Vec<usize> = (0..3).map(|k| standard.facing.iter().filter(|&&f| f == 1 << k).count()).collect();
+    assert!(used.iter().all(|&n| n > 50), "cascade use {used:?}");
+    for lookup in [
+        ShadowLookup::Spsm(Default::default()),
+        ShadowLookup::Sgsm(Default::default()),
+        ShadowLookup::SubPixelAa(AaSamples::X8),
+    ] {
+        let masks = render(&mut renderer, lookup);
+        assert_eq!(masks.facing, standard.facing, "{}: another cascade choice", lookup.name());
+        assert!(masks.shadow.iter().zip(&masks.facing).all(|(s, f)| s & !f == 0), "{}", lookup.name());
+        if let ShadowLookup::SubPixelAa(_) = lookup {
+            let words: Vec<Vec<u32>> = (0..3).map(|k| renderer.read_occlusion(k).unwrap()).collect();
+            let mut occluded = 0;
+            for (i, &f) in masks.facing.iter().enumerate() {
+                for (k, w) in words.iter().enumerate() {
+                    if w[i] != 0 {
+                        occluded += 1;
+                        assert_eq!(f, 1 << k, "pixel {i}: cascade {k}'s occlusion {:#x} where facing is {f:#b}", w[i]);
+                    }
+                }
+            }
+            assert!(occluded > 100, "only {occluded} occluded pixels");
+        }
+    }
+}

@@ -81,6 +81,16 @@ pub fn visible_depth_range(camera: &Camera, readback: &Readback<'_>) -> Result<O
 /// leaves the current one or the current one is looser than twice the
 /// padding, so they do not jitter frame to frame.
 ///
+/// The hysteresis is asymmetric, because a readback lags the camera: a
+/// range that leaves the current one grows it at once to hold both (the
+/// union: what the camera saw a few frames ago may be in view again, and
+/// beyond the end splits a surface is looked up outside its cascade's map),
+/// while a range that is too loose shrinks only once
+/// [`SHRINK_AFTER`](Self::SHRINK_AFTER) readbacks in a row found it too
+/// loose (a camera pressed against an object sees a short range for a few
+/// frames; the frame after it turns away the far field is back). Splits
+/// placed without a readback (the fixed ones) shrink at the first.
+///
 /// Splits are placed over the visible range padded by `hysteresis` (a ratio
 /// for perspective cameras, `hysteresis ·` the camera's range for
 /// orthographic ones), clamped to the camera's range limited to the scene
@@ -94,9 +104,17 @@ pub struct SplitTracker {
     range: Option<(f64, f64)>,
     splits: Option<Splits>,
     replaced: u64,
+    /// Whether the current range came from a readback.
+    seen_range: bool,
+    /// Readbacks in a row that found the current range too loose.
+    loose_readbacks: u32,
 }
 
 impl SplitTracker {
+    /// Consecutive readbacks that must find the splits too loose before
+    /// they shrink.
+    pub const SHRINK_AFTER: u32 = 2;
+
     /// A tracker for `policy`; `hysteresis` (for example 0.1) is the padding
     /// and tolerance described above.
     ///
@@ -108,7 +126,7 @@ impl SplitTracker {
         if !(hysteresis >= 0.0 && hysteresis.is_finite()) {
             return Err(LixelError::InvalidCascades { reason: "hysteresis must be finite and non-negative" });
         }
-        Ok(Self { policy, hysteresis, range: None, splits: None, replaced: 0 })
+        Ok(Self { policy, hysteresis, range: None, splits: None, replaced: 0, seen_range: false, loose_readbacks: 0 })
     }
 
     /// The current splits, if any update ran.
@@ -147,13 +165,22 @@ impl SplitTracker {
             Some((lo, hi)) if hi >= lo && lo < hi_limit && hi > lo_limit => (lo.max(lo_limit), hi.min(hi_limit)),
             _ => (lo_limit, hi_limit),
         };
-        let target = grow(seen, 1.0);
+        let mut target = grow(seen, 1.0);
+        let from_readback = visible.is_some();
         // Keep the splits while they hold what was seen and are not more
-        // than twice the padding too loose.
+        // than twice the padding too loose (for SHRINK_AFTER readbacks in a
+        // row, when the range came from a readback); a range that does not
+        // hold what was seen grows to the union.
         let keep = match (self.range, &self.splits) {
             (Some(current), Some(_)) => {
                 let loose = grow(seen, 2.0);
-                current.0 <= seen.0 && current.1 >= seen.1 && current.0 >= loose.0 && current.1 <= loose.1
+                let holds = current.0 <= seen.0 && current.1 >= seen.1;
+                let tight = current.0 >= loose.0 && current.1 <= loose.1;
+                self.loose_readbacks = if holds && !tight && from_readback { self.loose_readbacks + 1 } else { 0 };
+                if !holds && from_readback && self.seen_range {
+                    target = (target.0.min(current.0), target.1.max(current.1));
+                }
+                holds && (tight || (self.seen_range && from_readback && self.loose_readbacks < Self::SHRINK_AFTER))
             }
             _ => false,
         };
@@ -162,6 +189,8 @@ impl SplitTracker {
             self.splits = Some(self.policy.place(lo, hi)?);
             self.range = Some((lo, hi));
             self.replaced += 1;
+            self.seen_range = from_readback;
+            self.loose_readbacks = 0;
         }
         Ok(self.splits.as_ref().expect("placed above"))
     }
@@ -273,12 +302,19 @@ mod tests {
             assert_eq!(tracker.update(&problem, Some(range)).unwrap(), &first);
         }
         assert_eq!(tracker.replacements(), 1);
-        // Seeing nearer than the splits: re-placed at once, holding it.
-        let nearer = tracker.update(&problem, Some((0.5, 50.0))).unwrap().clone();
-        assert!(nearer.near() <= 0.5);
-        // Far tighter: re-placed.
+        // Seeing nearer than the splits: re-placed at once, holding it and
+        // what the splits held (a readback lags the camera).
+        let nearer = tracker.update(&problem, Some((0.5, 20.0))).unwrap().clone();
+        assert!(nearer.near() <= 0.5 && nearer.far() == first.far(), "{nearer:?}");
+        // Far tighter: re-placed once two readbacks in a row say so.
+        assert_eq!(tracker.update(&problem, Some((0.5, 10.0))).unwrap(), &nearer);
         let tight = tracker.update(&problem, Some((0.5, 10.0))).unwrap().clone();
         assert!(tight.far() < 15.0 && tight.far() >= 10.0, "{tight:?}");
+        assert_eq!(tracker.replacements(), 3);
+        // A tight readback between loose ones starts the count again.
+        for range in [(0.5, 4.0), (0.5, 10.0), (0.5, 4.0)] {
+            assert_eq!(tracker.update(&problem, Some(range)).unwrap(), &tight, "{range:?}");
+        }
         assert_eq!(tracker.replacements(), 3);
         // Nothing seen: the fixed splits of the camera range within the scene.
         let fixed = tracker.update(&problem, None).unwrap().clone();

@@ -778,6 +778,34 @@ impl<'a> Runner<'a> {
         Ok((masks, vec![m], frames, note))
     }
 
+    /// The antialiased passes' occlusion words of the sun drawn in map slots
+    /// `0..slots` (one light, or a cascaded sun's cascades): each cascade
+    /// computes words only where it owns the pixel (its facing bit), so
+    /// their OR is the owning cascade's.
+    fn occlusion(&self, slots: usize) -> Result<Vec<u32>, ExperimentError> {
+        let mut words = self.renderer.read_occlusion(0)?;
+        for k in 1..slots {
+            for (w, o) in words.iter_mut().zip(self.renderer.read_occlusion(k)?) {
+                *w |= o;
+            }
+        }
+        Ok(words)
+    }
+
+    /// The antialiased passes' counts of map slots `0..slots`, summed.
+    fn aa_stats(&self, slots: usize) -> Result<crate::render::subpixel::gpu::AaStats, ExperimentError> {
+        let mut s = self.renderer.read_aa_stats(0)?;
+        for k in 1..slots {
+            let t = self.renderer.read_aa_stats(k)?;
+            s.pairs = s.pairs.saturating_add(t.pairs);
+            s.exact_pixels += t.exact_pixels;
+            s.overflow_pixels += t.overflow_pixels;
+            s.wide_pixels += t.wide_pixels;
+            s.triangle_tests = s.triangle_tests.saturating_add(t.triangle_tests);
+        }
+        Ok(s)
+    }
+
     /// Runs configuration `index`.
     ///
     /// # Errors
@@ -810,7 +838,7 @@ impl<'a> Runner<'a> {
                     // of the same N sub-samples; others: the shadow bit.
                     let visibility = match (coverage.as_ref(), samples, method.lookup()) {
                         (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
-                            Some(VisibilityError::of_occlusion(&self.renderer.read_occlusion(0)?, &truth, c, n))
+                            Some(VisibilityError::of_occlusion(&self.occlusion(matrices.len())?, &truth, c, n))
                         }
                         (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
                         _ => None,
@@ -819,7 +847,7 @@ impl<'a> Runner<'a> {
                     // use and the pixels that kept the standard bit).
                     let note = match method.lookup() {
                         ShadowLookup::SubPixelAa(_) => {
-                            let s = self.renderer.read_aa_stats(0)?;
+                            let s = self.aa_stats(matrices.len())?;
                             let aa = format!(
                                 "aa pairs {} exact {} overflow {} wide {}",
                                 s.pairs, s.exact_pixels, s.overflow_pixels, s.wide_pixels
@@ -884,8 +912,10 @@ impl<'a> Runner<'a> {
 
 /// Checks the cascade settings: cascade methods need directional lights
 /// and `cascades` in `1..=`[`MAX_CASCADES`](crate::cascade::MAX_CASCADES)
-/// (at most [`MAX_LIGHTS`](crate::MAX_LIGHTS) maps), with the standard
-/// lookup; `cascades` > 0 needs directional lights.
+/// (at most [`MAX_LIGHTS`](crate::MAX_LIGHTS) maps); `cascades` > 0 needs
+/// directional lights. (Every lookup honours the per-pixel cascade choice:
+/// SPSM and SGSM shade through `shade`, the antialiased passes compute a
+/// cascade's words only where it owns the pixel.)
 ///
 /// # Errors
 /// [`ExperimentError::Cascades`] naming the method or flag.
@@ -904,9 +934,6 @@ pub fn check_cascades(config: &ExperimentConfig) -> Result<(), ExperimentError> 
         }
         if config.cascades == 0 {
             return refuse(format!("--methods {m}"), "a cascade method needs --cascades N (1 to 8)");
-        }
-        if m.lookup() != ShadowLookup::DepthCompare {
-            return refuse(format!("--methods {m}"), "cascade methods run with the standard lookup only");
         }
     }
     Ok(())

@@ -365,6 +365,37 @@ impl CascadeState {
 mod tests {
     use super::*;
 
+    #[test]
+    fn an_optimized_cascade_stands_only_for_receivers_its_map_or_its_readback_covered() {
+        use crate::{Aabb, Camera, SceneBounds, ShadowMapSize};
+        use glam::UVec2;
+        let camera = |z: f64| {
+            let eye = DVec3::new(0.0, 2.0, z);
+            Camera::look_at(eye, eye + DVec3::new(0.0, -0.1, -1.0), DVec3::Y, 1.0, UVec2::splat(64), 0.1, 200.0)
+                .unwrap()
+        };
+        let bounds =
+            SceneBounds::uniform(Aabb::from_corners(DVec3::new(-100.0, 0.0, -100.0), DVec3::new(100.0, 5.0, 100.0)));
+        let sun = Light::directional(DVec3::new(0.3, -1.0, 0.2));
+        let problem = |z| ShadowProblem::new(camera(z), sun, bounds, ShadowMapSize::square(256)).unwrap();
+        let slice = problem(0.0).depth_slice(1.0, 10.0).unwrap();
+        let body = slice.visible_receiver_body().vertices().to_vec();
+        assert!(!body.is_empty());
+        // Its own focused map holds the slice.
+        let own = slice.solve(&Parameterization::Focused).unwrap();
+        assert!(still_fits(&own, &body, None));
+        // A map of a far slice does not; it stands only while the readback's
+        // slice held the receivers (the same view), not after walking 5
+        // units forward or back.
+        let other = problem(0.0).depth_slice(40.0, 80.0).unwrap().solve(&Parameterization::Focused).unwrap();
+        assert!(!still_fits(&other, &body, None));
+        assert!(still_fits(&other, &body, Some(slice.camera())));
+        for z in [-5.0, 5.0] {
+            let moved = problem(z).depth_slice(1.0, 10.0).unwrap().visible_receiver_body().vertices().to_vec();
+            assert!(!still_fits(&other, &moved, Some(slice.camera())), "camera at z = {z}");
+        }
+    }
+
     // The binary literals are grouped by light slot (second sun | point | first sun).
     #[allow(clippy::unusual_byte_groupings)]
     #[test]
