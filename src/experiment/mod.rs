@@ -29,6 +29,7 @@ mod rows;
 mod rundir;
 mod shard;
 pub mod stability;
+mod stages;
 mod timing;
 
 use std::path::PathBuf;
@@ -54,6 +55,7 @@ pub use report::{markdown, MethodSummary, Summary};
 pub use rows::ConfigRow;
 pub use rundir::{report_dir, write_atomic};
 pub use shard::{Shard, ShardError};
+pub use stages::{RunStage, RunStages};
 pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
 
 /// Which ground truth the counts use.
@@ -552,6 +554,7 @@ pub struct Runner<'a> {
     camera: Camera,
     caster: Option<RayCaster>,
     renderer: Renderer,
+    stages: RunStages,
 }
 
 impl std::fmt::Debug for Runner<'_> {
@@ -597,8 +600,11 @@ impl<'a> Runner<'a> {
         let camera = camera_for(config, &scene)?;
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
         let options = experiment_renderer_options();
-        let renderer = Renderer::new(device, queue, &scene, options)?;
-        Ok(Self { config, scene, camera, caster, renderer })
+        let mut renderer = Renderer::new(device, queue, &scene, options)?;
+        // Every configuration and method sees the scene through this one
+        // camera: draw it once, shade the capture per method (same masks).
+        renderer.capture_view(&camera)?;
+        Ok(Self { config, scene, camera, caster, renderer, stages: RunStages::default() })
     }
 
     /// The camera.
@@ -611,6 +617,12 @@ impl<'a> Runner<'a> {
     #[must_use]
     pub fn scene(&self) -> &Scene {
         &self.scene
+    }
+
+    /// Wall time per stage so far.
+    #[must_use]
+    pub fn stages(&self) -> &RunStages {
+        &self.stages
     }
 
     /// The problem of one light at map size `map`.
@@ -728,15 +740,15 @@ impl<'a> Runner<'a> {
 
     /// A cascade method's frame loop at this configuration ([`ShadowLoop`]
     /// with [`LoopPolicy::Cascaded`], `config.cascades` maps of `config.map`²
-    /// for the sun), settled at its view; then its masks with the sun's
-    /// cascade bits folded into bit 0 ([`fold_cascade_masks`]). Returns the
-    /// masks, the cascades' matrices, the frames and a note.
-    fn cascaded_masks(
+    /// for the sun), settled at its view. Returns the cascades' matrices
+    /// (the renderer's cascades left marked for them), the frames and a
+    /// note.
+    fn settle_cascades(
         &mut self,
         cascade: CascadeMethod,
         light: Light,
         lookup: ShadowLookup,
-    ) -> Result<(ShadowMasks, Vec<LightMatrix>, usize, String), ExperimentError> {
+    ) -> Result<(Vec<LightMatrix>, usize, String), ExperimentError> {
         let count = self.config.cascades;
         let options = LoopOptions { lookup, ..Default::default() };
         let mut shadows = ShadowLoop::new(LoopPolicy::Cascaded(cascade.policy(count)), 1, options)?;
@@ -748,34 +760,50 @@ impl<'a> Runner<'a> {
             map: ShadowMapSize::square(self.config.map),
         };
         let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
-        // The loop left the renderer's cascades marked for these matrices.
-        let frame = Frame { camera: &self.camera, lights: &settled.matrices, masks: true, analysis: None, lookup };
-        let report = self.renderer.render(&frame)?;
-        self.renderer.wait_for(&report.submission)?;
-        let masks = fold_cascade_masks(&self.renderer.read_masks()?, &[0, settled.matrices.len()]);
         let note = settled.fallbacks[0].map(rows::fallback_note).unwrap_or_default();
-        Ok((masks, settled.matrices, settled.frames, note))
+        Ok((settled.matrices, settled.frames, note))
     }
 
-    /// The masks of `method` for `light` with `truth`'s nearest depth for
-    /// PSM: one map of `map`² (cascade methods: their cascades, of
-    /// `config.map`² each). Returns the masks, the matrices, the frames
-    /// and a note; the solver's refusals as [`ExperimentError::Solver`].
-    pub(super) fn method_masks(
+    /// The matrices of `method` for `light`: one map of `map`² with PSM's
+    /// near plane at `nearest`, or a cascade method's cascades (of
+    /// `config.map`² each; the renderer's cascades left marked for
+    /// [`method_masks_of`](Self::method_masks_of)). Returns the matrices,
+    /// the frames and a note; the solver's refusals as
+    /// [`ExperimentError::Solver`].
+    pub(super) fn solve_method(
         &mut self,
         method: MethodSpec,
         light: Light,
         map: u32,
-        truth: &ShadowMasks,
-    ) -> Result<(ShadowMasks, Vec<LightMatrix>, usize, String), ExperimentError> {
+        nearest: Option<f64>,
+    ) -> Result<(Vec<LightMatrix>, usize, String), ExperimentError> {
         if let Some(cascade) = method.cascade() {
-            return self.cascaded_masks(cascade, light, method.lookup());
+            return self.settle_cascades(cascade, light, method.lookup());
         }
-        let nearest = nearest_view_depth(&self.camera, truth);
         let problem = self.problem(light, map)?;
         let (m, frames, note) = self.matrix(method, &problem, nearest)?;
-        let masks = self.masks_with(&m, method.lookup())?;
-        Ok((masks, vec![m], frames, note))
+        Ok((vec![m], frames, note))
+    }
+
+    /// The masks of `method` rendered with the `matrices` of
+    /// [`solve_method`](Self::solve_method), called right after it: a
+    /// cascade method's with the sun's cascade bits folded into bit 0
+    /// ([`fold_cascade_masks`]).
+    pub(super) fn method_masks_of(
+        &mut self,
+        method: MethodSpec,
+        matrices: &[LightMatrix],
+    ) -> Result<ShadowMasks, ExperimentError> {
+        let lookup = method.lookup();
+        if method.cascade().is_none() {
+            let matrix = matrices.first().ok_or_else(|| ExperimentError::Config("no matrix".into()))?;
+            return self.masks_with(matrix, lookup);
+        }
+        // The loop left the renderer's cascades marked for these matrices.
+        let frame = Frame { camera: &self.camera, lights: matrices, masks: true, analysis: None, lookup };
+        let report = self.renderer.render(&frame)?;
+        self.renderer.wait_for(&report.submission)?;
+        Ok(fold_cascade_masks(&self.renderer.read_masks()?, &[0, matrices.len()]))
     }
 
     /// The antialiased passes' occlusion words of the sun drawn in map slots
@@ -815,6 +843,7 @@ impl<'a> Runner<'a> {
         let start = Instant::now();
         let light = light_for(self.config, &self.scene, index);
         let (ray, focused_truth) = self.truths(light)?;
+        let mut lap = self.stages.lap(RunStage::Truth, start);
         let truth_disagreement = match (&ray, &focused_truth) {
             (Some(a), Some(b)) => {
                 let c = Counts::compare(b, a);
@@ -828,12 +857,18 @@ impl<'a> Runner<'a> {
             (Some(centre), Some(caster), Some(_)) => Some(Coverage::trace(caster, &self.camera, &light, centre)),
             _ => None,
         };
+        lap = self.stages.lap(RunStage::Coverage, lap);
         let truth = ray.or(focused_truth).ok_or_else(|| ExperimentError::Config("no ground truth".into()))?;
+        // What a depth readback supplies to PSM: the nearest visible depth.
+        let nearest = nearest_view_depth(&self.camera, &truth);
         let mut results = Vec::new();
         for &method in &self.config.methods {
-            // What a depth readback supplies to PSM: the nearest visible depth.
-            let result = match self.method_masks(method, light, self.config.single_map(), &truth) {
-                Ok((masks, matrices, frames, note)) => {
+            let solved = self.solve_method(method, light, self.config.single_map(), nearest);
+            lap = self.stages.lap(RunStage::Matrices, lap);
+            let result = match solved {
+                Ok((matrices, frames, note)) => {
+                    let masks = self.method_masks_of(method, &matrices)?;
+                    lap = self.stages.lap(RunStage::Lookups, lap);
                     // `+aaN`: the renderer's occlusion words against the truth
                     // of the same N sub-samples; others: the shadow bit.
                     let visibility = match (coverage.as_ref(), samples, method.lookup()) {
@@ -860,15 +895,10 @@ impl<'a> Runner<'a> {
                         }
                         _ => note,
                     };
+                    let counts = Some(Counts::compare(&masks, &truth));
+                    lap = self.stages.lap(RunStage::Compare, lap);
                     let cascades = if method.cascade().is_some() { matrices.clone() } else { Vec::new() };
-                    MethodResult {
-                        matrix: matrices.first().copied(),
-                        cascades,
-                        counts: Some(Counts::compare(&masks, &truth)),
-                        visibility,
-                        frames,
-                        note,
-                    }
+                    MethodResult { matrix: matrices.first().copied(), cascades, counts, visibility, frames, note }
                 }
                 Err(ExperimentError::Solver(e)) => MethodResult {
                     matrix: None,
@@ -891,22 +921,42 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn mean_at_resolution(&mut self, method: MethodSpec, map: u32, count: usize) -> Result<f64, ExperimentError> {
-        let mut total = 0.0;
-        let mut n = 0usize;
+        Ok(self.means_at_resolutions(&[(method, map)], count)?[0])
+    }
+
+    /// [`mean_at_resolution`](Self::mean_at_resolution) for several
+    /// (method, map size) runs at once: each configuration's truth is
+    /// computed once and shared by every run (the ladder has a dozen sizes),
+    /// and each run's sum is taken in configuration order, so the means are
+    /// bit-identical to one run at a time. `NaN` for a run no configuration
+    /// could solve.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn means_at_resolutions(
+        &mut self,
+        runs: &[(MethodSpec, u32)],
+        count: usize,
+    ) -> Result<Vec<f64>, ExperimentError> {
+        let mut sums = vec![(0.0f64, 0usize); runs.len()];
         for index in 0..count {
             let light = light_for(self.config, &self.scene, index);
             let (ray, focused_truth) = self.truths(light)?;
             let Some(truth) = ray.or(focused_truth) else { continue };
-            match self.method_masks(method, light, map, &truth) {
-                Ok((masks, ..)) => {
-                    total += Counts::compare(&masks, &truth).misclassified() as f64;
-                    n += 1;
+            let nearest = nearest_view_depth(&self.camera, &truth);
+            for (&(method, map), (total, n)) in runs.iter().zip(&mut sums) {
+                match self.solve_method(method, light, map, nearest) {
+                    Ok((matrices, ..)) => {
+                        let masks = self.method_masks_of(method, &matrices)?;
+                        *total += Counts::compare(&masks, &truth).misclassified() as f64;
+                        *n += 1;
+                    }
+                    Err(ExperimentError::Solver(_)) => {}
+                    Err(e) => return Err(e),
                 }
-                Err(ExperimentError::Solver(_)) => {}
-                Err(e) => return Err(e),
             }
         }
-        Ok(if n == 0 { f64::NAN } else { total / n as f64 })
+        Ok(sums.into_iter().map(|(total, n)| if n == 0 { f64::NAN } else { total / n as f64 }).collect())
     }
 }
 
