@@ -1086,6 +1086,8 @@ pub fn run(
 mod tests {
     use super::*;
 
+    // The binary literals are grouped by light slot (second sun | point | first sun).
+    #[allow(clippy::unusual_byte_groupings)]
     #[test]
     fn folding_cascades_gives_one_bit_per_sun() {
         // Slots: a sun in 0..2, a point light in 2, a sun in 3..6.
