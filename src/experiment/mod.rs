@@ -681,6 +681,13 @@ impl<'a> Runner<'a> {
                         (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
                             Some(VisibilityError::of_occlusion(&self.renderer.read_occlusion(0)?, &truth, c, n))
                         }
+                        (Some(c), Some(_), ShadowLookup::Supersampled(n)) => Some(VisibilityError::of_supersampled(
+                            &self.renderer.read_supersampled(0)?,
+                            &masks,
+                            &truth,
+                            c,
+                            n,
+                        )),
                         (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
                         _ => None,
                     };

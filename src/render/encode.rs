@@ -140,6 +140,21 @@ impl Renderer {
         timer: Option<&timing::FrameQueries>,
     ) -> u64 {
         let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
+        self.encode_camera_pass_into(encoder, state, &camera.clip_from_world(), targets, output, timer)
+    }
+
+    /// The camera pass into `targets`, culling with `clip_from_world` (the
+    /// supersampled mode's jittered passes draw into targets of their own;
+    /// the camera uniforms must hold the same matrix).
+    pub(crate) fn encode_camera_pass_into(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &LookupState,
+        clip_from_world: &glam::DMat4,
+        targets: &super::passes::CameraTargets,
+        output: CameraOutput,
+        timer: Option<&timing::FrameQueries>,
+    ) -> u64 {
         let bg = self.options.background.as_dvec3();
         let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
             view: &targets.color.view,
@@ -169,7 +184,7 @@ impl Renderer {
         });
         pass.set_bind_group(0, &self.camera_bindings.bind_group, &[]);
         pass.set_bind_group(1, &state.maps.bind_group, &[]);
-        self.draw_scene(&mut pass, &camera.clip_from_world(), DepthClip::Clipped)
+        self.draw_scene(&mut pass, clip_from_world, DepthClip::Clipped)
     }
 
     pub(crate) fn encode_analysis_pass(
