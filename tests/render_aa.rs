@@ -144,10 +144,12 @@ fn pair_count_matches_a_cpu_count() {
 }
 
 /// On the tiny scene (96x96 pixels, focused 256² map), the 32-sample
-/// visibility of the antialiased lookup is within 0.01 mean absolute error
-/// of the ray-cast coverage truth and under 0.4x the standard lookup's
-/// error (measured: 0.0060 against 0.0258 for the sun, 0.0047 against
-/// 0.0147 for the point light); its shadow bits are the standard lookup's.
+/// visibility of the antialiased lookup is within 0.006 mean absolute error
+/// of the ray-cast coverage truth and under 0.3x the standard lookup's
+/// error (measured with facets on the triangles' planes: 0.0036 against
+/// 0.0258 for the sun, 0.0032 against 0.0147 for the point light; 0.0060
+/// and 0.0047 on the interpolated normals); its shadow bits are the
+/// standard lookup's.
 #[test]
 fn visibility_matches_the_coverage_truth() {
     let Some((device, queue)) = gpu() else { return };
@@ -171,8 +173,8 @@ fn visibility_matches_the_coverage_truth() {
         eprintln!("{light:?}: standard {e_std:.4}, aa32 {e_aa:.4}, {stats:?}");
         assert!(stats.exact_pixels > 50, "{stats:?}");
         assert_eq!(stats.overflow_pixels, 0);
-        assert!(e_aa < 0.4 * e_std, "aa32 {e_aa} against standard {e_std}");
-        assert!(e_aa < 0.01, "aa32 {e_aa}");
+        assert!(e_aa < 0.3 * e_std, "aa32 {e_aa} against standard {e_std}");
+        assert!(e_aa < 0.006, "aa32 {e_aa}");
         // Partial pixels exist: the words are not all-or-nothing.
         let partial = occlusion.iter().filter(|&&w| w != 0 && w != u32::MAX).count();
         assert!(partial > 20, "{partial} partial pixels");
