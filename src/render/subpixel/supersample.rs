@@ -247,7 +247,7 @@ impl Renderer {
         let groups = (width.div_ceil(8), height.div_ceil(8));
         for (k, clip) in clips.iter().enumerate() {
             encoder.copy_buffer_to_buffer(&pass.cameras, k as u64 * raw_size, &self.camera_uniforms, 0, raw_size);
-            self.encode_camera_pass_into(encoder, state, clip, &sized.targets, CameraOutput::ColorAndMasks, None);
+            self.encode_camera_pass_into(encoder, state, clip, &sized.targets, CameraOutput::ColorAndMasks, None, None);
             let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("lixel supersample gather"),
                 timestamp_writes: None,
@@ -303,7 +303,14 @@ mod tests {
 
     #[test]
     fn jittered_pixel_centres_fall_on_the_sub_samples() {
-        let clip = DMat4::perspective_infinite_reverse_lh(1.0, 1.3, 0.1) * DMat4::from_rotation_y(0.3);
+        // A perspective projection (w = z) looking down +z, turned a little.
+        let projection = DMat4::from_cols(
+            DVec4::new(1.2, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, 1.6, 0.0, 0.0),
+            DVec4::new(0.0, 0.0, 1.0, 1.0),
+            DVec4::new(0.0, 0.0, -0.1, 0.0),
+        );
+        let clip = projection * DMat4::from_rotation_y(0.3);
         let (w, h) = (37u32, 23u32);
         let to_pixel = |m: &DMat4, p: DVec3| {
             let c = *m * DVec4::from((p, 1.0));
