@@ -206,7 +206,7 @@ impl Renderer {
     /// The lights whose words fit one storage binding of this device (8
     /// bytes per pixel and light); later lights are not gathered.
     fn supersample_lights(&self, lights: usize, pixels: u64) -> u32 {
-        let limit = u64::from(self.device.limits().max_storage_buffer_binding_size);
+        let limit = self.device.limits().max_storage_buffer_binding_size;
         (lights as u64).min(limit / (8 * pixels).max(1)) as u32
     }
 
