@@ -11,7 +11,7 @@ use crate::light::{Light, LightFrame};
 use crate::matrix::{Fallback, LightMatrix, Method, Placement};
 use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
 use crate::tolerance::Tolerances;
-use crate::workspace::{with_workspace, SolveWorkspace};
+use crate::workspace::{with_workspace, CasterKey, SolveWorkspace};
 
 /// Sides of the pyramid that stands in for a spot light's cone (it
 /// circumscribes the cone, so it never loses a lit point).
@@ -355,11 +355,16 @@ impl ShadowProblem {
             out.clear();
             return;
         }
+        let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
+        if ws.casters.get_into(&key, focus, out) {
+            return;
+        }
         let mut planes = ws.take_planes();
         self.towards_light_planes_into(focus, &mut planes, ws);
         out.set_aabb(self.bounds.casters.min, self.bounds.casters.max);
         out.clip_all_in_place(planes.iter(), self.eps(), &mut ws.clip);
         ws.put_planes(planes);
+        ws.casters.store(key, focus, out);
     }
 
     /// Half-spaces of `body` grown towards the light (hull with the light's

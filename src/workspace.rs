@@ -18,6 +18,14 @@
 //! (`tests/optimize_workspace.rs` checks this over random and hard cases).
 //! Spot lights clip the receivers by their own frustum before the view
 //! frustum, so their visible receivers are not cached.
+//!
+//! A second cache holds the last caster body (the caster box clipped by the
+//! region between a body and the light): most of a solve on a fixed camera
+//! once `V ∩ R` is cached. It is keyed by the light, the casters' bounds and
+//! the tolerance (bits) and by the body it was built around (compared bit
+//! for bit), so it hits when the same light is solved again around the same
+//! body: several methods for one light in a row, or one workspace per light
+//! from frame to frame while camera and light stand still.
 
 use std::cell::Cell;
 
@@ -26,7 +34,8 @@ use glam::{DMat4, DVec2, DVec3};
 use crate::camera::Camera;
 use crate::fit::FitWorkspace;
 use crate::geometry::{ClipWorkspace, ConvexPolyhedron, Plane};
-use crate::scene::SceneBounds;
+use crate::light::Light;
+use crate::scene::{Aabb, SceneBounds};
 
 /// Reusable buffers for solving many [`ShadowProblem`](crate::ShadowProblem)s,
 /// with a cache of the camera-only bodies.
@@ -52,6 +61,7 @@ pub struct SolveWorkspace {
     points: Vec<Vec<DVec3>>,
     planes: Vec<Vec<Plane>>,
     pub(crate) view: ViewCache,
+    pub(crate) casters: CasterCache,
 }
 
 impl Default for SolveWorkspace {
@@ -85,6 +95,7 @@ impl SolveWorkspace {
             points: Vec::new(),
             planes: Vec::new(),
             view: ViewCache { enabled, ..ViewCache::default() },
+            casters: CasterCache { enabled, ..CasterCache::default() },
         }
     }
 
@@ -192,6 +203,68 @@ impl ViewCache {
     /// A body for a result about to be cached (buffers from a retired one).
     pub(crate) fn spare_body(&mut self) -> ConvexPolyhedron {
         self.spare.pop().unwrap_or_default()
+    }
+}
+
+/// The last caster body built, with what it was built from.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CasterCache {
+    enabled: bool,
+    key: Option<CasterKey>,
+    /// The body the casters were found for (compared bit for bit).
+    focus: ConvexPolyhedron,
+    casters: ConvexPolyhedron,
+}
+
+/// The inputs of a caster body besides the body it is built around: the
+/// light, the casters' bounds and the plane tolerance, as bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct CasterKey {
+    light: [u64; 8],
+    casters: [u64; 6],
+    eps: u64,
+}
+
+impl CasterKey {
+    pub(crate) fn new(light: &Light, casters: &Aabb, eps: f64) -> Self {
+        let v = |d: DVec3| d.to_array().map(f64::to_bits);
+        let light = match *light {
+            Light::Directional { direction } => {
+                let d = v(direction);
+                [0, d[0], d[1], d[2], 0, 0, 0, 0]
+            }
+            Light::Point { position } => {
+                let p = v(position);
+                [1, p[0], p[1], p[2], 0, 0, 0, 0]
+            }
+            Light::Spot { position, direction, outer_half_angle_radians } => {
+                let (p, d) = (v(position), v(direction));
+                [2, p[0], p[1], p[2], d[0], d[1], d[2], outer_half_angle_radians.to_bits()]
+            }
+        };
+        let (min, max) = (v(casters.min), v(casters.max));
+        Self { light, casters: [min[0], min[1], min[2], max[0], max[1], max[2]], eps: eps.to_bits() }
+    }
+}
+
+impl CasterCache {
+    /// Copies the cached caster body into `out` if it was built for `key`
+    /// around a body bit-equal to `focus`; returns whether it was.
+    pub(crate) fn get_into(&self, key: &CasterKey, focus: &ConvexPolyhedron, out: &mut ConvexPolyhedron) -> bool {
+        let hit = self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
+        if hit {
+            out.copy_from(&self.casters);
+        }
+        hit
+    }
+
+    /// Remembers `casters`, built for `key` around `focus`.
+    pub(crate) fn store(&mut self, key: CasterKey, focus: &ConvexPolyhedron, casters: &ConvexPolyhedron) {
+        if self.enabled {
+            self.key = Some(key);
+            self.focus.copy_from(focus);
+            self.casters.copy_from(casters);
+        }
     }
 }
 

@@ -124,6 +124,23 @@ impl ConvexPolyhedron {
         self.indices.clone_from(&other.indices);
     }
 
+    /// Whether `other` is the same body bit for bit: vertices, face loops
+    /// and face planes (`-0.0` differs from `0.0`; a NaN equals itself).
+    /// Whatever is computed from a body alone is the same for both.
+    pub(crate) fn bit_eq(&self, other: &Self) -> bool {
+        let bits = |v: &DVec3| v.to_array().map(f64::to_bits);
+        self.indices == other.indices
+            && self.vertices.len() == other.vertices.len()
+            && self.faces.len() == other.faces.len()
+            && self.vertices.iter().zip(&other.vertices).all(|(a, b)| bits(a) == bits(b))
+            && self.faces.iter().zip(&other.faces).all(|(a, b)| {
+                a.start == b.start
+                    && a.end == b.end
+                    && bits(&a.plane.normal) == bits(&b.plane.normal)
+                    && a.plane.offset.to_bits() == b.plane.offset.to_bits()
+            })
+    }
+
     /// The vertices, indexed by [`Face::indices`].
     #[must_use]
     pub fn vertices(&self) -> &[DVec3] {
