@@ -11,7 +11,7 @@ use crate::light::{Light, LightFrame};
 use crate::matrix::{Fallback, LightMatrix, Method, Placement};
 use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
 use crate::tolerance::Tolerances;
-use crate::workspace::{with_workspace, CasterKey, SolveWorkspace};
+use crate::workspace::{light_bits, with_workspace, CasterKey, SolveWorkspace};
 
 /// Sides of the pyramid that stands in for a spot light's cone (it
 /// circumscribes the cone, so it never loses a lit point).
@@ -291,7 +291,8 @@ impl ShadowProblem {
 
     /// [`Self::visible_receiver_body`] into `out`. Without a light frustum
     /// (point and directional lights) this is `V ∩ R`, taken from the
-    /// workspace's camera cache when it holds it.
+    /// workspace's camera cache when it holds it; a spot light's is cached
+    /// under its bits once it comes twice in a row.
     pub(crate) fn visible_receiver_body_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
         self.prepare_view(ws);
         let own_frustum = matches!(self.light, Light::Spot { .. });
@@ -301,9 +302,17 @@ impl ShadowProblem {
                 return;
             }
         }
+        let spot = own_frustum.then(|| light_bits(&self.light));
+        if let Some(spot) = &spot {
+            if ws.view.spot_into(spot, out) {
+                return;
+            }
+        }
         self.receiver_body_into(out, ws);
         out.clip_all_in_place(ws.view.planes.iter(), self.eps(), &mut ws.clip);
-        if !own_frustum {
+        if let Some(spot) = spot {
+            ws.view.store_spot(spot, out);
+        } else {
             let mut cached = ws.view.spare_body();
             cached.copy_from(out);
             ws.view.visible = Some(cached);

@@ -17,7 +17,8 @@
 //! same input, so the matrices are bit-identical to an uncached solve
 //! (`tests/optimize_workspace.rs` checks this over random and hard cases).
 //! Spot lights clip the receivers by their own frustum before the view
-//! frustum, so their visible receivers are not cached.
+//! frustum, so their visible receivers depend on the light too: the cache
+//! keeps those of the last spot light solved twice in a row (its bits).
 //!
 //! A second cache holds the last caster body (the caster box clipped by the
 //! region between a body and the light): most of a solve on a fixed camera
@@ -145,6 +146,11 @@ pub(crate) struct ViewCache {
     pub(crate) visible: Option<ConvexPolyhedron>,
     /// The view frustum as a body.
     pub(crate) view_body: Option<ConvexPolyhedron>,
+    /// `V ∩ R ∩ L` of a spot light (its bits), kept once the same spot light
+    /// has been solved twice in a row under this camera.
+    spot: Option<([u64; 8], ConvexPolyhedron)>,
+    /// The last spot light whose visible receivers were built.
+    spot_seen: Option<[u64; 8]>,
     /// Retired bodies, kept for their buffers.
     spare: Vec<ConvexPolyhedron>,
 }
@@ -198,6 +204,39 @@ impl ViewCache {
         planes(&mut self.planes);
         self.spare.extend(self.visible.take());
         self.spare.extend(self.view_body.take());
+        self.spare.extend(self.spot.take().map(|(_, body)| body));
+        self.spot_seen = None;
+    }
+
+    /// Copies the cached visible receivers of spot light `light` into
+    /// `out`; returns whether they were cached.
+    pub(crate) fn spot_into(&self, light: &[u64; 8], out: &mut ConvexPolyhedron) -> bool {
+        match &self.spot {
+            Some((key, body)) if key == light => {
+                out.copy_from(body);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Notes that `body` is the visible receivers of spot light `light`
+    /// under the prepared camera; keeps it when the previous spot light
+    /// built was the same.
+    pub(crate) fn store_spot(&mut self, light: [u64; 8], body: &ConvexPolyhedron) {
+        if !self.enabled {
+            return;
+        }
+        if self.spot_seen == Some(light) {
+            let mut cached = match self.spot.take() {
+                Some((_, cached)) => cached,
+                None => self.spare_body(),
+            };
+            cached.copy_from(body);
+            self.spot = Some((light, cached));
+        } else {
+            self.spot_seen = Some(light);
+        }
     }
 
     /// A body for a result about to be cached (buffers from a retired one).
@@ -207,9 +246,17 @@ impl ViewCache {
 }
 
 /// The last caster body built, with what it was built from.
+///
+/// Bodies are kept only once the same key has come twice in a row (the
+/// first time only the key is noted): a workspace whose lights change on
+/// every solve (random cameras, many lights through one workspace) then
+/// pays a key comparison per solve, not two body copies.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct CasterCache {
     enabled: bool,
+    /// The key of the last caster body built.
+    seen: Option<CasterKey>,
+    /// The key of the bodies below, when they are valid.
     key: Option<CasterKey>,
     /// The body the casters were found for (compared bit for bit).
     focus: ConvexPolyhedron,
@@ -228,22 +275,27 @@ pub(crate) struct CasterKey {
 impl CasterKey {
     pub(crate) fn new(light: &Light, casters: &Aabb, eps: f64) -> Self {
         let v = |d: DVec3| d.to_array().map(f64::to_bits);
-        let light = match *light {
-            Light::Directional { direction } => {
-                let d = v(direction);
-                [0, d[0], d[1], d[2], 0, 0, 0, 0]
-            }
-            Light::Point { position } => {
-                let p = v(position);
-                [1, p[0], p[1], p[2], 0, 0, 0, 0]
-            }
-            Light::Spot { position, direction, outer_half_angle_radians } => {
-                let (p, d) = (v(position), v(direction));
-                [2, p[0], p[1], p[2], d[0], d[1], d[2], outer_half_angle_radians.to_bits()]
-            }
-        };
         let (min, max) = (v(casters.min), v(casters.max));
-        Self { light, casters: [min[0], min[1], min[2], max[0], max[1], max[2]], eps: eps.to_bits() }
+        Self { light: light_bits(light), casters: [min[0], min[1], min[2], max[0], max[1], max[2]], eps: eps.to_bits() }
+    }
+}
+
+/// A light's kind and parameters as bits (a cache key).
+pub(crate) fn light_bits(light: &Light) -> [u64; 8] {
+    let v = |d: DVec3| d.to_array().map(f64::to_bits);
+    match *light {
+        Light::Directional { direction } => {
+            let d = v(direction);
+            [0, d[0], d[1], d[2], 0, 0, 0, 0]
+        }
+        Light::Point { position } => {
+            let p = v(position);
+            [1, p[0], p[1], p[2], 0, 0, 0, 0]
+        }
+        Light::Spot { position, direction, outer_half_angle_radians } => {
+            let (p, d) = (v(position), v(direction));
+            [2, p[0], p[1], p[2], d[0], d[1], d[2], outer_half_angle_radians.to_bits()]
+        }
     }
 }
 
@@ -258,12 +310,18 @@ impl CasterCache {
         hit
     }
 
-    /// Remembers `casters`, built for `key` around `focus`.
+    /// Notes that `casters` was built for `key` around `focus`; keeps the
+    /// bodies when the previous one was built for the same key.
     pub(crate) fn store(&mut self, key: CasterKey, focus: &ConvexPolyhedron, casters: &ConvexPolyhedron) {
-        if self.enabled {
+        if !self.enabled {
+            return;
+        }
+        if self.seen == Some(key) {
             self.key = Some(key);
             self.focus.copy_from(focus);
             self.casters.copy_from(casters);
+        } else {
+            self.seen = Some(key);
         }
     }
 }

@@ -4,8 +4,8 @@
 //! equals the same solve through a fresh uncached workspace and through
 //! `ShadowProblem::solve`, matrices and errors alike, over random cameras
 //! with hard lights: inside the receivers, far away, grazing a flat floor,
-//! along and against the view direction, spot lights (their visible
-//! receivers never cached). The same holds for the caster-body cache: light
+//! along and against the view direction, spot lights. The same holds for the
+//! per-light caches (caster bodies; a spot light's visible receivers): light
 //! by light through one workspace, through one workspace per light, and with
 //! the casters' bounds changed under the same light.
 
