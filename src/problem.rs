@@ -304,7 +304,7 @@ impl ShadowProblem {
         }
         let spot = own_frustum.then(|| light_bits(&self.light));
         if let Some(spot) = &spot {
-            if ws.view.spot_into(spot, out) {
+            if ws.view.spot.get_into(spot, out) {
                 return;
             }
         }
@@ -328,9 +328,14 @@ impl ShadowProblem {
         body
     }
 
-    /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera cache.
+    /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera
+    /// cache (and the hull itself when the same light built it last).
     pub(crate) fn psm_hull_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
         self.prepare_view_body(ws);
+        let light = light_bits(&self.light);
+        if ws.view.psm_hull.get_into(&light, out) {
+            return;
+        }
         let view = ws.view.view_body.take().unwrap_or_default();
         if view.is_empty() {
             out.clear();
@@ -342,6 +347,7 @@ impl ShadowProblem {
             ws.put_planes(planes);
         }
         ws.view.view_body = Some(view);
+        ws.view.store_psm_hull(light, out);
     }
 
     /// The casters that can shadow `focus`: `conv(focus ∪ l) ∩ C` (point and

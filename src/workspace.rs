@@ -18,7 +18,8 @@
 //! (`tests/optimize_workspace.rs` checks this over random and hard cases).
 //! Spot lights clip the receivers by their own frustum before the view
 //! frustum, so their visible receivers depend on the light too: the cache
-//! keeps those of the last spot light solved twice in a row (its bits).
+//! keeps those of the last spot light solved twice in a row (its bits), and
+//! so PSM's hull `conv(V ∪ l) ∩ S ∩ L` of the last light.
 //!
 //! A second cache holds the last caster body (the caster box clipped by the
 //! region between a body and the light): most of a solve on a fixed camera
@@ -146,13 +147,62 @@ pub(crate) struct ViewCache {
     pub(crate) visible: Option<ConvexPolyhedron>,
     /// The view frustum as a body.
     pub(crate) view_body: Option<ConvexPolyhedron>,
-    /// `V ∩ R ∩ L` of a spot light (its bits), kept once the same spot light
-    /// has been solved twice in a row under this camera.
-    spot: Option<([u64; 8], ConvexPolyhedron)>,
-    /// The last spot light whose visible receivers were built.
-    spot_seen: Option<[u64; 8]>,
+    /// `V ∩ R ∩ L` of a spot light.
+    pub(crate) spot: LightEntry,
+    /// PSM's hull `conv(V ∪ l) ∩ S ∩ L`.
+    pub(crate) psm_hull: LightEntry,
     /// Retired bodies, kept for their buffers.
     spare: Vec<ConvexPolyhedron>,
+}
+
+/// A body that depends on the camera cache's key and on one light: kept,
+/// under the light's bits, once the same light has built it twice in a row
+/// (a workspace whose lights change every solve then copies nothing).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LightEntry {
+    /// The last light that built the body.
+    seen: Option<[u64; 8]>,
+    /// The kept body and its light.
+    kept: Option<([u64; 8], ConvexPolyhedron)>,
+}
+
+impl LightEntry {
+    /// Copies the body kept for `light` into `out`; returns whether there
+    /// was one.
+    pub(crate) fn get_into(&self, light: &[u64; 8], out: &mut ConvexPolyhedron) -> bool {
+        match &self.kept {
+            Some((key, body)) if key == light => {
+                out.copy_from(body);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Notes that `light` built `body` under the prepared camera: keeps a
+    /// copy (buffers from `spare`) when the previous light to build it was
+    /// the same.
+    fn store(&mut self, enabled: bool, spare: &mut Vec<ConvexPolyhedron>, light: [u64; 8], body: &ConvexPolyhedron) {
+        if !enabled {
+            return;
+        }
+        if self.seen == Some(light) {
+            let mut cached = match self.kept.take() {
+                Some((_, cached)) => cached,
+                None => spare.pop().unwrap_or_default(),
+            };
+            cached.copy_from(body);
+            self.kept = Some((light, cached));
+        } else {
+            self.seen = Some(light);
+        }
+    }
+
+    /// Forgets the body (the camera cache's key changed).
+    fn retire(&mut self, spare: &mut Vec<ConvexPolyhedron>) {
+        spare.extend(self.kept.take().map(|(_, body)| body));
+        self.seen = None;
+    }
 }
 
 /// What the cached results depend on.
@@ -204,39 +254,18 @@ impl ViewCache {
         planes(&mut self.planes);
         self.spare.extend(self.visible.take());
         self.spare.extend(self.view_body.take());
-        self.spare.extend(self.spot.take().map(|(_, body)| body));
-        self.spot_seen = None;
+        self.spot.retire(&mut self.spare);
+        self.psm_hull.retire(&mut self.spare);
     }
 
-    /// Copies the cached visible receivers of spot light `light` into
-    /// `out`; returns whether they were cached.
-    pub(crate) fn spot_into(&self, light: &[u64; 8], out: &mut ConvexPolyhedron) -> bool {
-        match &self.spot {
-            Some((key, body)) if key == light => {
-                out.copy_from(body);
-                true
-            }
-            _ => false,
-        }
-    }
-
-    /// Notes that `body` is the visible receivers of spot light `light`
-    /// under the prepared camera; keeps it when the previous spot light
-    /// built was the same.
+    /// Notes that spot light `light` built the visible receivers `body`.
     pub(crate) fn store_spot(&mut self, light: [u64; 8], body: &ConvexPolyhedron) {
-        if !self.enabled {
-            return;
-        }
-        if self.spot_seen == Some(light) {
-            let mut cached = match self.spot.take() {
-                Some((_, cached)) => cached,
-                None => self.spare_body(),
-            };
-            cached.copy_from(body);
-            self.spot = Some((light, cached));
-        } else {
-            self.spot_seen = Some(light);
-        }
+        self.spot.store(self.enabled, &mut self.spare, light, body);
+    }
+
+    /// Notes that `light` built PSM's hull `body`.
+    pub(crate) fn store_psm_hull(&mut self, light: [u64; 8], body: &ConvexPolyhedron) {
+        self.psm_hull.store(self.enabled, &mut self.spare, light, body);
     }
 
     /// A body for a result about to be cached (buffers from a retired one).
