@@ -48,7 +48,11 @@ use crate::scene::{Aabb, SceneBounds};
 /// solved, solving allocates nothing. Results never depend on what the
 /// workspace held before: its camera-only cache is keyed by the camera's
 /// matrices, clip distances and the scene bounds (bit for bit) and the plane
-/// tolerance, and rebuilt on any change.
+/// tolerance, and rebuilt on any change; its per-light entries (the caster
+/// body, a spot light's visible receivers, PSM's hull) are keyed by the
+/// light's bits as well, and kept only once the same light comes twice in a
+/// row. For frame-to-frame reuse under a still camera keep one workspace per
+/// light: a workspace shared by many lights hits only the camera cache.
 #[derive(Clone, Debug)]
 pub struct SolveWorkspace {
     pub(crate) clip: ClipWorkspace,
