@@ -34,8 +34,9 @@ fn methods(c: &mut Criterion) {
 /// The frame-to-frame case: one camera and scene bounds (the first seeded
 /// configuration's) with the 64 seeded configurations' lights. `solve` keeps
 /// a per-thread workspace whose camera cache (view planes, `V ∩ R`, `V`)
-/// then hits for every point and directional light; on the random
-/// configurations above every call misses it.
+/// then hits for every point and directional light (its per-light entries
+/// miss: the light changes on every call); on the random configurations
+/// above every call misses it.
 fn fixed_camera(c: &mut Criterion) {
     let all = problems();
     let first = &all[0];
