@@ -521,7 +521,10 @@ impl<'a> Runner<'a> {
         let camera = camera_for(config, &scene)?;
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
         let options = experiment_renderer_options();
-        let renderer = Renderer::new(device, queue, &scene, options)?;
+        let mut renderer = Renderer::new(device, queue, &scene, options)?;
+        // Every configuration and method sees the scene through this one
+        // camera: draw it once, shade the capture per method (same masks).
+        renderer.capture_view(&camera)?;
         Ok(Self { config, scene, camera, caster, renderer, stages: RunStages::default() })
     }
 

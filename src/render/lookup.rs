@@ -242,6 +242,11 @@ impl LookupState {
         }
     }
 
+    /// Builds the view-capture pipelines of this mode's camera shader.
+    pub(crate) fn ensure_deferred(&mut self, device: &wgpu::Device, layouts: &SceneLayouts) {
+        self.camera.deferred(device, layouts, &self.maps_layout);
+    }
+
     /// Grows the maps to hold `layers` maps of up to `width x height`.
     pub(crate) fn ensure_maps(&mut self, device: &wgpu::Device, width: u32, height: u32, layers: u32) {
         let maps = &self.maps;
