@@ -341,7 +341,8 @@ fn the_frame_loop_drives_cascades() {
 /// the depth compare, and the antialiased passes (`aa_passes.wgsl`, once per
 /// map slot) compute a cascade's occlusion words only where the camera pass
 /// gave that cascade the pixel's facing bit, so OR-ing a sun's slots gives
-/// the owning cascade's words.
+/// the owning cascade's words; the supersampled lookup's sub-samples are
+/// each owned by one cascade.
 #[test]
 fn every_lookup_honours_the_cascade_choice() {
     use lixel::render::subpixel::AaSamples;
@@ -363,14 +364,33 @@ fn every_lookup_honours_the_cascade_choice() {
     let standard = render(&mut renderer, ShadowLookup::DepthCompare);
     let used: Vec<usize> = (0..3).map(|k| standard.facing.iter().filter(|&&f| f == 1 << k).count()).collect();
     assert!(used.iter().all(|&n| n > 50), "cascade use {used:?}");
-    for lookup in [
+    let lookups = [
         ShadowLookup::Spsm(Default::default()),
         ShadowLookup::Sgsm(Default::default()),
         ShadowLookup::SubPixelAa(AaSamples::X8),
-    ] {
+        ShadowLookup::Supersampled(AaSamples::X8),
+    ];
+    for lookup in lookups {
         let masks = render(&mut renderer, lookup);
         assert_eq!(masks.facing, standard.facing, "{}: another cascade choice", lookup.name());
         assert!(masks.shadow.iter().zip(&masks.facing).all(|(s, f)| s & !f == 0), "{}", lookup.name());
+        if let ShadowLookup::Supersampled(_) = lookup {
+            // Each sub-sample is owned by one cascade: the slots' valid
+            // words are disjoint, and a slot shadows only what it owns.
+            let words: Vec<_> = (0..3).map(|k| renderer.read_supersampled(k).unwrap()).collect();
+            let mut owned = 0;
+            for i in 0..masks.facing.len() {
+                let mut seen = 0u32;
+                for w in &words {
+                    assert_eq!(seen & w.valid[i], 0, "pixel {i}: a sub-sample owned by two cascades");
+                    assert_eq!(w.occluded[i] & !w.valid[i], 0, "pixel {i}");
+                    seen |= w.valid[i];
+                }
+                owned += usize::from(seen != 0);
+            }
+            assert!(owned > 1000, "only {owned} pixels with owned sub-samples");
+            continue;
+        }
         if let ShadowLookup::SubPixelAa(_) = lookup {
             let words: Vec<Vec<u32>> = (0..3).map(|k| renderer.read_occlusion(k).unwrap()).collect();
             let mut occluded = 0;

@@ -820,6 +820,27 @@ impl<'a> Runner<'a> {
         Ok(words)
     }
 
+    /// The supersampled lookup's words of the sun drawn in map slots
+    /// `0..slots`: each sub-sample's camera pass sets a cascade's facing and
+    /// shadow bits only where it owns the sub-sample, so the OR of the
+    /// slots' words is the owning cascade's.
+    fn supersampled(
+        &self,
+        slots: usize,
+    ) -> Result<crate::render::subpixel::supersample::SupersampledWords, ExperimentError> {
+        let mut words = self.renderer.read_supersampled(0)?;
+        for k in 1..slots {
+            let more = self.renderer.read_supersampled(k)?;
+            for (w, o) in words.valid.iter_mut().zip(more.valid) {
+                *w |= o;
+            }
+            for (w, o) in words.occluded.iter_mut().zip(more.occluded) {
+                *w |= o;
+            }
+        }
+        Ok(words)
+    }
+
     /// The antialiased passes' counts of map slots `0..slots`, summed.
     fn aa_stats(&self, slots: usize) -> Result<crate::render::subpixel::gpu::AaStats, ExperimentError> {
         let mut s = self.renderer.read_aa_stats(0)?;
@@ -875,6 +896,13 @@ impl<'a> Runner<'a> {
                         (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
                             Some(VisibilityError::of_occlusion(&self.occlusion(matrices.len())?, &truth, c, n))
                         }
+                        (Some(c), Some(_), ShadowLookup::Supersampled(n)) => Some(VisibilityError::of_supersampled(
+                            &self.supersampled(matrices.len())?,
+                            &masks,
+                            &truth,
+                            c,
+                            n,
+                        )),
                         (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
                         _ => None,
                     };

@@ -142,6 +142,23 @@ impl Renderer {
         timer: Option<&timing::FrameQueries>,
     ) -> u64 {
         let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
+        self.encode_camera_pass_into(encoder, state, &camera.clip_from_world(), targets, output, capture, timer)
+    }
+
+    /// The camera pass into `targets`, culling with `clip_from_world` (the
+    /// supersampled mode's jittered passes draw into targets of their own;
+    /// the camera uniforms must hold the same matrix).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode_camera_pass_into(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &LookupState,
+        clip_from_world: &glam::DMat4,
+        targets: &super::passes::CameraTargets,
+        output: CameraOutput,
+        capture: Option<&ViewCapture>,
+        timer: Option<&timing::FrameQueries>,
+    ) -> u64 {
         let bg = self.options.background.as_dvec3();
         let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
             view: &targets.color.view,
@@ -180,7 +197,7 @@ impl Renderer {
             CameraOutput::Color => &state.camera.color,
             CameraOutput::ColorAndMasks => &state.camera.color_masks,
         });
-        self.draw_scene(&mut pass, &camera.clip_from_world(), DepthClip::Clipped)
+        self.draw_scene(&mut pass, clip_from_world, DepthClip::Clipped)
     }
 
     /// Draws the scene from the capture's camera into its targets (the

@@ -303,6 +303,8 @@ pub struct Renderer {
     /// scene buffers read back) with blocker bias `aa_bias` (world units).
     aa: Option<subpixel::gpu::AaPass>,
     aa_bias: f32,
+    /// The supersampled mode's gather pass, built on its first frame.
+    ss: Option<subpixel::supersample::SupersamplePass>,
     /// The view drawn once by [`Renderer::capture_view`].
     capture: Option<capture::ViewCapture>,
 }
@@ -456,6 +458,7 @@ impl Renderer {
             cascades: Vec::new(),
             aa: None,
             aa_bias,
+            ss: None,
             capture: None,
             options,
             errors,
@@ -669,6 +672,10 @@ impl Renderer {
                 samples,
             );
         }
+        if let ShadowLookup::Supersampled(samples) = frame.lookup {
+            self.encode_supersampled(&mut encoder, slots.lookup, frame.camera, frame.lights.len(), samples);
+        }
+        let state = &self.lookups[slots.lookup];
         if let Some((_, buffer)) = &analysis_staging {
             self.encode_analysis_pass(&mut encoder, state, frame.camera, buffer, timer.as_ref());
         }
@@ -732,6 +739,9 @@ impl Renderer {
         let lookup = self.lookup_state(frame.lookup)?;
         if matches!(frame.lookup, ShadowLookup::SubPixelAa(_)) {
             self.ensure_aa()?;
+        }
+        if matches!(frame.lookup, ShadowLookup::Supersampled(_)) {
+            self.ensure_supersample()?;
         }
         self.ensure_resources(lookup, &maps, viewport.x, viewport.y);
         Ok(MapSlots { maps, analysis_layers, lookup })
