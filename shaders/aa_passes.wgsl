@@ -444,6 +444,138 @@ fn pixel_near(px: u32, py: u32, s: vec2<f32>, size: vec2<f32>) -> vec3<f32> {
     return h.xyz / h.w;
 }
 
+// A pixel's facet (facet.rs, Facet::new) on the plane through its point
+// with normal n, in a frame centred on that point (f32 loses too much on far
+// pixels in world coordinates): view rays D(s) = D0 s.x + D1 s.y + D2 from
+// the eye E meet the plane n.x = 0 at X(s) = ((n.D(s)) E - (n.E) D(s), n.D(s)),
+// linear in s: the columns. `ok` false when the plane is seen edge-on.
+struct FacetCols {
+    ok: bool,
+    cols: array<vec4<f32>, 3>,
+}
+
+fn facet_cols(n: vec3<f32>, eye: vec3<f32>, d0: vec3<f32>, d1: vec3<f32>, d2: vec3<f32>) -> FacetCols {
+    let ne = dot(n, eye);
+    var f: FacetCols;
+    f.cols = array<vec4<f32>, 3>(
+        vec4<f32>(dot(n, d0) * eye - ne * d0, dot(n, d0)),
+        vec4<f32>(dot(n, d1) * eye - ne * d1, dot(n, d1)),
+        vec4<f32>(dot(n, d2) * eye - ne * d2, dot(n, d2)),
+    );
+    let mid = f.cols[0] * 0.5 + f.cols[1] * 0.5 + f.cols[2];
+    f.ok = abs(mid.w) > 0.0;
+    if mid.w < 0.0 {
+        f.cols = array<vec4<f32>, 3>(-f.cols[0], -f.cols[1], -f.cols[2]);
+    }
+    return f;
+}
+
+// A facet's footprint in the light's map (texels) and its size; `ok`
+// false when a corner is behind the camera or the light.
+struct Footprint {
+    ok: bool,
+    lo: vec2<f32>,
+    hi: vec2<f32>,
+    diameter: f32,
+}
+
+fn facet_footprint(
+    cols: array<vec4<f32>, 3>,
+    eye: vec3<f32>,
+    rays: array<vec3<f32>, 3>,
+    point: vec3<f32>,
+    light: Light,
+) -> Footprint {
+    var out: Footprint;
+    out.ok = false;
+    out.lo = vec2<f32>(1e30);
+    out.hi = vec2<f32>(-1e30);
+    out.diameter = 0.0;
+    var first = vec3<f32>(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        let s = vec2<f32>(f32(k & 1u), f32(k >> 1u));
+        let x = cols[0] * s.x + cols[1] * s.y + cols[2];
+        if !(x.w > 0.0) {
+            return out;
+        }
+        let local = x.xyz / x.w;
+        // In front of the camera, as Facet::new asks.
+        if !(dot(local - eye, rays[0] * s.x + rays[1] * s.y + rays[2]) > 0.0) {
+            return out;
+        }
+        if k == 0u {
+            first = local;
+        } else {
+            out.diameter = max(out.diameter, distance(local, first));
+        }
+        let clip = light.clip_from_world * vec4<f32>(local + point, 1.0);
+        if !(clip.w > 0.0) {
+            return out;
+        }
+        let texel = to_texel(clip);
+        out.lo = min(out.lo, texel);
+        out.hi = max(out.hi, texel);
+    }
+    out.ok = true;
+    return out;
+}
+
+// The tiles of a footprint: (first tile, last tile); x of the first > x of
+// the last when the footprint misses the map.
+fn footprint_tiles(fp: Footprint) -> vec4<i32> {
+    let map = map_size();
+    if any(fp.hi < vec2<f32>(0.0)) || any(fp.lo >= map) {
+        return vec4<i32>(1, 0, 0, 0);
+    }
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    let ta = clamp(vec2<i32>(floor(fp.lo)), vec2<i32>(0), last) / i32(TILE);
+    let tb = clamp(vec2<i32>(floor(fp.hi)), vec2<i32>(0), last) / i32(TILE);
+    return vec4<i32>(ta, tb);
+}
+
+// Why a footprint's tiles cannot serve the exact path: 0 they can;
+// STAT_WIDE (too many tiles, or one without a list); STAT_OVERFLOW (a list
+// did not fit).
+fn tiles_unusable(t: vec4<i32>) -> u32 {
+    if u32((t.z - t.x + 1) * (t.w - t.y + 1)) > MAX_FOOTPRINT_TILES {
+        return STAT_WIDE;
+    }
+    for (var ty = t.y; ty <= t.w; ty++) {
+        for (var tx = t.x; tx <= t.z; tx++) {
+            let tile = u32(ty) * params.tiles_x + u32(tx);
+            if !tile_active(vec2<i32>(tx, ty)) {
+                return STAT_WIDE;
+            }
+            if atomicLoad(&tile_words[offset_slot(tile)]) + atomicLoad(&tile_words[count_slot(tile)]) > params.capacity {
+                return STAT_OVERFLOW;
+            }
+        }
+    }
+    return 0u;
+}
+
+// The unit geometric normal of a triangle of tiles `t` holding the pixel's
+// point (the origin), turned towards `n`; `n` when none does.
+fn face_normal(t: vec4<i32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f32> {
+    for (var ty = t.y; ty <= t.w; ty++) {
+        for (var tx = t.x; tx <= t.z; tx++) {
+            let tile = u32(ty) * params.tiles_x + u32(tx);
+            let start = atomicLoad(&tile_words[offset_slot(tile)]);
+            let count = atomicLoad(&tile_words[count_slot(tile)]);
+            for (var k = 0u; k < count; k++) {
+                let tri = tile_list[start + k];
+                let v = array<vec3<f32>, 3>(vertex(tri, 0u) - point, vertex(tri, 1u) - point, vertex(tri, 2u) - point);
+                let g = cross(v[1] - v[0], v[2] - v[0]);
+                let scale = length(g);
+                if scale > 0.0 && holds(v, g, scale, tol) {
+                    return g / scale * select(-1.0, 1.0, dot(g, n) >= 0.0);
+                }
+            }
+        }
+    }
+    return n;
+}
+
 @compute @workgroup_size(64)
 fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = flat_id(gid, groups);
@@ -467,106 +599,64 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     let centre_ndc = vec2<f32>((f32(px) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + 0.5) / size.y * 2.0);
     let hp = camera.world_from_clip * vec4<f32>(centre_ndc, depth, 1.0);
     let point = hp.xyz / hp.w;
-    let n = unpack_normal(words.w);
-    // The pixel's facet (facet.rs, Facet::new) in a frame centred on its
-    // point (f32 loses too much on far pixels in world coordinates): view
-    // rays D(s) = D0 s.x + D1 s.y + D2 from the eye E through the pixel's
-    // near-plane points meet the plane n.x = 0 at
-    // X(s) = ((n.D(s)) E - (n.E) D(s), n.D(s)), linear in s.
     let near = pixel_near(px, py, vec2<f32>(0.0), size);
-    let d0 = pixel_near(px, py, vec2<f32>(1.0, 0.0), size) - near;
-    let d1 = pixel_near(px, py, vec2<f32>(0.0, 1.0), size) - near;
-    let d2 = near - camera.eye.xyz;
-    let eye = camera.eye.xyz - point;
-    let ne = dot(n, eye);
-    var cols = array<vec4<f32>, 3>(
-        vec4<f32>(dot(n, d0) * eye - ne * d0, dot(n, d0)),
-        vec4<f32>(dot(n, d1) * eye - ne * d1, dot(n, d1)),
-        vec4<f32>(dot(n, d2) * eye - ne * d2, dot(n, d2)),
+    let rays = array<vec3<f32>, 3>(
+        pixel_near(px, py, vec2<f32>(1.0, 0.0), size) - near,
+        pixel_near(px, py, vec2<f32>(0.0, 1.0), size) - near,
+        near - camera.eye.xyz,
     );
-    let mid = cols[0] * 0.5 + cols[1] * 0.5 + cols[2];
-    if !(abs(mid.w) > 0.0) {
+    let eye = camera.eye.xyz - point;
+    // First the facet on the masks' (interpolated) normal: it decides
+    // whether the pixel takes the exact path.
+    let n = unpack_normal(words.w);
+    var facet = facet_cols(n, eye, rays[0], rays[1], rays[2]);
+    if !facet.ok {
         return;
     }
-    if mid.w < 0.0 {
-        cols = array<vec4<f32>, 3>(-cols[0], -cols[1], -cols[2]);
-    }
-    // The light in the local frame.
-    let l = vec4<f32>(light.position.xyz - point * light.position.w, light.position.w);
-    // Corners: in front of the camera and the light; footprint in texels.
-    var lo = vec2<f32>(1e30);
-    var hi = vec2<f32>(-1e30);
-    var first = vec3<f32>(0.0);
-    var diameter = 0.0;
-    for (var k = 0u; k < 4u; k++) {
-        let s = vec2<f32>(f32(k & 1u), f32(k >> 1u));
-        let x = cols[0] * s.x + cols[1] * s.y + cols[2];
-        if !(x.w > 0.0) {
-            return;
-        }
-        let local = x.xyz / x.w;
-        // In front of the camera, as Facet::new asks.
-        if !(dot(local - eye, d0 * s.x + d1 * s.y + d2) > 0.0) {
-            return;
-        }
-        if k == 0u {
-            first = local;
-        } else {
-            diameter = max(diameter, distance(local, first));
-        }
-        let world = local + point;
-        let clip = light.clip_from_world * vec4<f32>(world, 1.0);
-        if !(clip.w > 0.0) {
-            return;
-        }
-        let texel = to_texel(clip);
-        lo = min(lo, texel);
-        hi = max(hi, texel);
-    }
-    let map = map_size();
-    if any(hi < vec2<f32>(0.0)) || any(lo >= map) {
+    var fp = facet_footprint(facet.cols, eye, rays, point, light);
+    if !fp.ok {
         return;
     }
-    let a = vec2<i32>(floor(lo));
-    let b = vec2<i32>(floor(hi));
-    if rect_sum(a, b) == 0u {
+    var t = footprint_tiles(fp);
+    if t.x > t.z || rect_sum(vec2<i32>(floor(fp.lo)), vec2<i32>(floor(fp.hi))) == 0u {
         return;
     }
-    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
-    let ta = clamp(a, vec2<i32>(0), last) / i32(TILE);
-    let tb = clamp(b, vec2<i32>(0), last) / i32(TILE);
-    let tiles = u32((tb.x - ta.x + 1) * (tb.y - ta.y + 1));
-    if tiles > MAX_FOOTPRINT_TILES {
-        add_stat(STAT_WIDE, 1u);
+    let why = tiles_unusable(t);
+    if why != 0u {
+        add_stat(why, 1u);
         return;
     }
-    for (var ty = ta.y; ty <= tb.y; ty++) {
-        for (var tx = ta.x; tx <= tb.x; tx++) {
-            let tile = u32(ty) * params.tiles_x + u32(tx);
-            if !tile_active(vec2<i32>(tx, ty)) {
-                add_stat(STAT_WIDE, 1u);
-                return;
-            }
-            if atomicLoad(&tile_words[offset_slot(tile)]) + atomicLoad(&tile_words[count_slot(tile)]) > params.capacity {
-                add_stat(STAT_OVERFLOW, 1u);
-                return;
+    // Then Pan et al.'s facet: the plane of the triangle holding the
+    // pixel's point (found among its tiles' triangles), when its footprint
+    // is served by tiles as well.
+    let face = face_normal(t, point, n, params.bias + 0.01 * fp.diameter);
+    if any(face != n) {
+        let f = facet_cols(face, eye, rays[0], rays[1], rays[2]);
+        if f.ok {
+            let g = facet_footprint(f.cols, eye, rays, point, light);
+            let gt = footprint_tiles(g);
+            if g.ok && gt.x <= gt.z && tiles_unusable(gt) == 0u {
+                facet = f;
+                fp = g;
+                t = gt;
             }
         }
     }
     // Triangles holding the pixel's own point (its triangle) are skipped; the others' planes are pushed away from the
     // light by the scene bias plus a hundredth of the facet's size (the
     // depth buffer's error in the reconstructed point).
-    let bias = params.bias + 0.01 * diameter;
+    let bias = params.bias + 0.01 * fp.diameter;
+    let l = vec4<f32>(light.position.xyz - point * light.position.w, light.position.w);
     var occluded = 0u;
     var tests = 0u;
-    for (var ty = ta.y; ty <= tb.y; ty++) {
-        for (var tx = ta.x; tx <= tb.x; tx++) {
+    for (var ty = t.y; ty <= t.w; ty++) {
+        for (var tx = t.x; tx <= t.z; tx++) {
             let tile = u32(ty) * params.tiles_x + u32(tx);
             let start = atomicLoad(&tile_words[offset_slot(tile)]);
             let count = atomicLoad(&tile_words[count_slot(tile)]);
             tests += count;
             for (var k = 0u; k < count; k++) {
-                occluded |= triangle_mask(tile_list[start + k], cols, l, bias, point);
+                occluded |= triangle_mask(tile_list[start + k], facet.cols, l, bias, point);
                 if (occluded & params.sample_mask) == params.sample_mask {
                     break;
                 }

@@ -169,7 +169,7 @@ struct ExperimentArgs {
     #[arg(long)]
     timing_gpu_stages: bool,
     /// Lookup modes timed as "focused + <lookup>" pipelines of the timing table, comma-separated
-    /// (spsm, sgsm, aa8, aa16, aa32; default spsm).
+    /// (spsm, sgsm, aa8, aa16, aa32, ss8, ss16, ss32; default spsm).
     #[arg(long, value_delimiter = ',', value_parser = parse_lookup)]
     timing_lookups: Option<Vec<ShadowLookup>>,
     /// No progress bar.

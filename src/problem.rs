@@ -11,7 +11,7 @@ use crate::light::{Light, LightFrame};
 use crate::matrix::{Fallback, LightMatrix, Method, Placement};
 use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
 use crate::tolerance::Tolerances;
-use crate::workspace::{with_workspace, SolveWorkspace};
+use crate::workspace::{light_bits, with_workspace, CasterKey, SolveWorkspace};
 
 /// Sides of the pyramid that stands in for a spot light's cone (it
 /// circumscribes the cone, so it never loses a lit point).
@@ -291,7 +291,8 @@ impl ShadowProblem {
 
     /// [`Self::visible_receiver_body`] into `out`. Without a light frustum
     /// (point and directional lights) this is `V ∩ R`, taken from the
-    /// workspace's camera cache when it holds it.
+    /// workspace's camera cache when it holds it; a spot light's is cached
+    /// under its bits once it comes twice in a row.
     pub(crate) fn visible_receiver_body_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
         self.prepare_view(ws);
         let own_frustum = matches!(self.light, Light::Spot { .. });
@@ -301,9 +302,17 @@ impl ShadowProblem {
                 return;
             }
         }
+        let spot = own_frustum.then(|| light_bits(&self.light));
+        if let Some(spot) = &spot {
+            if ws.view.spot.get_into(spot, out) {
+                return;
+            }
+        }
         self.receiver_body_into(out, ws);
         out.clip_all_in_place(ws.view.planes.iter(), self.eps(), &mut ws.clip);
-        if !own_frustum {
+        if let Some(spot) = spot {
+            ws.view.store_spot(spot, out);
+        } else {
             let mut cached = ws.view.spare_body();
             cached.copy_from(out);
             ws.view.visible = Some(cached);
@@ -319,9 +328,14 @@ impl ShadowProblem {
         body
     }
 
-    /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera cache.
+    /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera
+    /// cache (and the hull itself when the same light built it last).
     pub(crate) fn psm_hull_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
         self.prepare_view_body(ws);
+        let light = light_bits(&self.light);
+        if ws.view.psm_hull.get_into(&light, out) {
+            return;
+        }
         let view = ws.view.view_body.take().unwrap_or_default();
         if view.is_empty() {
             out.clear();
@@ -333,6 +347,7 @@ impl ShadowProblem {
             ws.put_planes(planes);
         }
         ws.view.view_body = Some(view);
+        ws.view.store_psm_hull(light, out);
     }
 
     /// The casters that can shadow `focus`: `conv(focus ∪ l) ∩ C` (point and
@@ -355,11 +370,16 @@ impl ShadowProblem {
             out.clear();
             return;
         }
+        let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
+        if ws.casters.get_into(&key, focus, out) {
+            return;
+        }
         let mut planes = ws.take_planes();
         self.towards_light_planes_into(focus, &mut planes, ws);
         out.set_aabb(self.bounds.casters.min, self.bounds.casters.max);
         out.clip_all_in_place(planes.iter(), self.eps(), &mut ws.clip);
         ws.put_planes(planes);
+        ws.casters.store(key, focus, out);
     }
 
     /// Half-spaces of `body` grown towards the light (hull with the light's

@@ -17,7 +17,17 @@
 //! same input, so the matrices are bit-identical to an uncached solve
 //! (`tests/optimize_workspace.rs` checks this over random and hard cases).
 //! Spot lights clip the receivers by their own frustum before the view
-//! frustum, so their visible receivers are not cached.
+//! frustum, so their visible receivers depend on the light too: the cache
+//! keeps those of the last spot light solved twice in a row (its bits), and
+//! so PSM's hull `conv(V ∪ l) ∩ S ∩ L` of the last light.
+//!
+//! A second cache holds the last caster body (the caster box clipped by the
+//! region between a body and the light): most of a solve on a fixed camera
+//! once `V ∩ R` is cached. It is keyed by the light, the casters' bounds and
+//! the tolerance (bits) and by the body it was built around (compared bit
+//! for bit), so it hits when the same light is solved again around the same
+//! body: several methods for one light in a row, or one workspace per light
+//! from frame to frame while camera and light stand still.
 
 use std::cell::Cell;
 
@@ -26,7 +36,8 @@ use glam::{DMat4, DVec2, DVec3};
 use crate::camera::Camera;
 use crate::fit::FitWorkspace;
 use crate::geometry::{ClipWorkspace, ConvexPolyhedron, Plane};
-use crate::scene::SceneBounds;
+use crate::light::Light;
+use crate::scene::{Aabb, SceneBounds};
 
 /// Reusable buffers for solving many [`ShadowProblem`](crate::ShadowProblem)s,
 /// with a cache of the camera-only bodies.
@@ -37,7 +48,11 @@ use crate::scene::SceneBounds;
 /// solved, solving allocates nothing. Results never depend on what the
 /// workspace held before: its camera-only cache is keyed by the camera's
 /// matrices, clip distances and the scene bounds (bit for bit) and the plane
-/// tolerance, and rebuilt on any change.
+/// tolerance, and rebuilt on any change; its per-light entries (the caster
+/// body, a spot light's visible receivers, PSM's hull) are keyed by the
+/// light's bits as well, and kept only once the same light comes twice in a
+/// row. For frame-to-frame reuse under a still camera keep one workspace per
+/// light: a workspace shared by many lights hits only the camera cache.
 #[derive(Clone, Debug)]
 pub struct SolveWorkspace {
     pub(crate) clip: ClipWorkspace,
@@ -52,6 +67,7 @@ pub struct SolveWorkspace {
     points: Vec<Vec<DVec3>>,
     planes: Vec<Vec<Plane>>,
     pub(crate) view: ViewCache,
+    pub(crate) casters: CasterCache,
 }
 
 impl Default for SolveWorkspace {
@@ -85,6 +101,7 @@ impl SolveWorkspace {
             points: Vec::new(),
             planes: Vec::new(),
             view: ViewCache { enabled, ..ViewCache::default() },
+            casters: CasterCache { enabled, ..CasterCache::default() },
         }
     }
 
@@ -134,8 +151,62 @@ pub(crate) struct ViewCache {
     pub(crate) visible: Option<ConvexPolyhedron>,
     /// The view frustum as a body.
     pub(crate) view_body: Option<ConvexPolyhedron>,
+    /// `V ∩ R ∩ L` of a spot light.
+    pub(crate) spot: LightEntry,
+    /// PSM's hull `conv(V ∪ l) ∩ S ∩ L`.
+    pub(crate) psm_hull: LightEntry,
     /// Retired bodies, kept for their buffers.
     spare: Vec<ConvexPolyhedron>,
+}
+
+/// A body that depends on the camera cache's key and on one light: kept,
+/// under the light's bits, once the same light has built it twice in a row
+/// (a workspace whose lights change every solve then copies nothing).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LightEntry {
+    /// The last light that built the body.
+    seen: Option<[u64; 8]>,
+    /// The kept body and its light.
+    kept: Option<([u64; 8], ConvexPolyhedron)>,
+}
+
+impl LightEntry {
+    /// Copies the body kept for `light` into `out`; returns whether there
+    /// was one.
+    pub(crate) fn get_into(&self, light: &[u64; 8], out: &mut ConvexPolyhedron) -> bool {
+        match &self.kept {
+            Some((key, body)) if key == light => {
+                out.copy_from(body);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Notes that `light` built `body` under the prepared camera: keeps a
+    /// copy (buffers from `spare`) when the previous light to build it was
+    /// the same.
+    fn store(&mut self, enabled: bool, spare: &mut Vec<ConvexPolyhedron>, light: [u64; 8], body: &ConvexPolyhedron) {
+        if !enabled {
+            return;
+        }
+        if self.seen == Some(light) {
+            let mut cached = match self.kept.take() {
+                Some((_, cached)) => cached,
+                None => spare.pop().unwrap_or_default(),
+            };
+            cached.copy_from(body);
+            self.kept = Some((light, cached));
+        } else {
+            self.seen = Some(light);
+        }
+    }
+
+    /// Forgets the body (the camera cache's key changed).
+    fn retire(&mut self, spare: &mut Vec<ConvexPolyhedron>) {
+        spare.extend(self.kept.take().map(|(_, body)| body));
+        self.seen = None;
+    }
 }
 
 /// What the cached results depend on.
@@ -187,11 +258,104 @@ impl ViewCache {
         planes(&mut self.planes);
         self.spare.extend(self.visible.take());
         self.spare.extend(self.view_body.take());
+        self.spot.retire(&mut self.spare);
+        self.psm_hull.retire(&mut self.spare);
+    }
+
+    /// Notes that spot light `light` built the visible receivers `body`.
+    pub(crate) fn store_spot(&mut self, light: [u64; 8], body: &ConvexPolyhedron) {
+        self.spot.store(self.enabled, &mut self.spare, light, body);
+    }
+
+    /// Notes that `light` built PSM's hull `body`.
+    pub(crate) fn store_psm_hull(&mut self, light: [u64; 8], body: &ConvexPolyhedron) {
+        self.psm_hull.store(self.enabled, &mut self.spare, light, body);
     }
 
     /// A body for a result about to be cached (buffers from a retired one).
     pub(crate) fn spare_body(&mut self) -> ConvexPolyhedron {
         self.spare.pop().unwrap_or_default()
+    }
+}
+
+/// The last caster body built, with what it was built from.
+///
+/// Bodies are kept only once the same key has come twice in a row (the
+/// first time only the key is noted): a workspace whose lights change on
+/// every solve (random cameras, many lights through one workspace) then
+/// pays a key comparison per solve, not two body copies.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CasterCache {
+    enabled: bool,
+    /// The key of the last caster body built.
+    seen: Option<CasterKey>,
+    /// The key of the bodies below, when they are valid.
+    key: Option<CasterKey>,
+    /// The body the casters were found for (compared bit for bit).
+    focus: ConvexPolyhedron,
+    casters: ConvexPolyhedron,
+}
+
+/// The inputs of a caster body besides the body it is built around: the
+/// light, the casters' bounds and the plane tolerance, as bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct CasterKey {
+    light: [u64; 8],
+    casters: [u64; 6],
+    eps: u64,
+}
+
+impl CasterKey {
+    pub(crate) fn new(light: &Light, casters: &Aabb, eps: f64) -> Self {
+        let v = |d: DVec3| d.to_array().map(f64::to_bits);
+        let (min, max) = (v(casters.min), v(casters.max));
+        Self { light: light_bits(light), casters: [min[0], min[1], min[2], max[0], max[1], max[2]], eps: eps.to_bits() }
+    }
+}
+
+/// A light's kind and parameters as bits (a cache key).
+pub(crate) fn light_bits(light: &Light) -> [u64; 8] {
+    let v = |d: DVec3| d.to_array().map(f64::to_bits);
+    match *light {
+        Light::Directional { direction } => {
+            let d = v(direction);
+            [0, d[0], d[1], d[2], 0, 0, 0, 0]
+        }
+        Light::Point { position } => {
+            let p = v(position);
+            [1, p[0], p[1], p[2], 0, 0, 0, 0]
+        }
+        Light::Spot { position, direction, outer_half_angle_radians } => {
+            let (p, d) = (v(position), v(direction));
+            [2, p[0], p[1], p[2], d[0], d[1], d[2], outer_half_angle_radians.to_bits()]
+        }
+    }
+}
+
+impl CasterCache {
+    /// Copies the cached caster body into `out` if it was built for `key`
+    /// around a body bit-equal to `focus`; returns whether it was.
+    pub(crate) fn get_into(&self, key: &CasterKey, focus: &ConvexPolyhedron, out: &mut ConvexPolyhedron) -> bool {
+        let hit = self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
+        if hit {
+            out.copy_from(&self.casters);
+        }
+        hit
+    }
+
+    /// Notes that `casters` was built for `key` around `focus`; keeps the
+    /// bodies when the previous one was built for the same key.
+    pub(crate) fn store(&mut self, key: CasterKey, focus: &ConvexPolyhedron, casters: &ConvexPolyhedron) {
+        if !self.enabled {
+            return;
+        }
+        if self.seen == Some(key) {
+            self.key = Some(key);
+            self.focus.copy_from(focus);
+            self.casters.copy_from(casters);
+        } else {
+            self.seen = Some(key);
+        }
     }
 }
 

@@ -65,6 +65,11 @@ fn quick_preset_writes_a_consistent_report_deterministically_and_resumes() {
     assert!(agreement >= 0.99, "truths agree on only {:.3}%", 100.0 * agreement);
     let report = std::fs::read_to_string(first.join("report.md")).unwrap();
     assert!(report.contains("| all |") && report.contains("worst 10% of optimized"));
+    // The per-stage breakdown: the truth and the method renders took time.
+    use lixel::experiment::RunStage;
+    assert!(report.contains("## Where the time went") && report.contains("| ground truth |"), "{report}");
+    assert!(!summary.stages.get(RunStage::Truth).is_zero() && !summary.stages.get(RunStage::Lookups).is_zero());
+    assert!(summary.stages.total() <= summary.elapsed, "{:?} > {:?}", summary.stages, summary.elapsed);
 
     // Same seed, same configs.csv; an interrupted run resumes to the same file.
     let c2 = config(&second);

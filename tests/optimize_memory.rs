@@ -7,8 +7,8 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicIsize, Ordering};
 
 use glam::DVec3;
-use lixel::optimize::{OptimizeOptions, Optimizer, SampleOptions, SampleWorkspace};
-use lixel::{Light, Parameterization, Samples};
+use lixel::optimize::{OptimizeOptions, OptimizeReport, Optimizer, SampleOptions, SampleWorkspace};
+use lixel::{Light, Parameterization, Samples, SolveWorkspace};
 
 mod common;
 
@@ -115,6 +115,30 @@ fn repeated_calls_do_not_grow_memory() {
             }
         });
         assert_eq!(per_call, 0.0, "{name} allocates after warm-up when the camera changes");
+        // Through the workspace API: one workspace for all (its caster cache
+        // misses between lights), one per light (every cache hits), and an
+        // uncached one (everything rebuilt in its buffers).
+        let mut shared = SolveWorkspace::new();
+        let per_call = steady_state(&format!("{name}, solve_with, one workspace, cameras alternating"), || {
+            for problem in problems.iter().zip(&other_camera).flat_map(|(a, b)| [a, b]) {
+                std::hint::black_box(problem.solve_with(&parameterization, &mut shared).ok());
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates through solve_with after warm-up");
+        let mut per_light: Vec<SolveWorkspace> = problems.iter().map(|_| SolveWorkspace::new()).collect();
+        let per_call = steady_state(&format!("{name}, solve_with, a workspace per light"), || {
+            for (problem, workspace) in problems.iter().zip(&mut per_light) {
+                std::hint::black_box(problem.solve_with(&parameterization, workspace).ok());
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates through per-light workspaces after warm-up");
+        let mut uncached = SolveWorkspace::uncached();
+        let per_call = steady_state(&format!("{name}, solve_with, uncached workspace"), || {
+            for problem in &problems {
+                std::hint::black_box(problem.solve_with(&parameterization, &mut uncached).ok());
+            }
+        });
+        assert_eq!(per_call, 0.0, "{name} allocates through an uncached workspace after warm-up");
     }
 }
 
@@ -135,10 +159,17 @@ fn repeated_optimization_does_not_grow_memory() {
     }
     let after = LIVE.load(Ordering::Relaxed);
     assert!(after <= baseline, "live heap grew from {baseline} to {after} bytes over 200 calls");
-    // One allocation per call remains, and it is the answer's: the report's
+    // `optimize` allocates one vector per call, the answer's: the report's
     // list of the angles tried (reserved once at its final size).
     let per_call = steady_state("optimizer", || {
         prev = Some(optimizer.optimize(&samples, prev.as_ref()).unwrap().matrix);
     });
     assert!(per_call <= 1.0, "the optimizer allocates {per_call} times per call after warm-up");
+    // `optimize_into` reuses the report: nothing.
+    let mut report = OptimizeReport::default();
+    let per_call = steady_state("optimizer, optimize_into", || {
+        prev = Some(optimizer.optimize_into(&samples, prev.as_ref(), &mut report).unwrap());
+        std::hint::black_box(&report);
+    });
+    assert_eq!(per_call, 0.0, "optimize_into allocates after warm-up");
 }

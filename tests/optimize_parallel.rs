@@ -2,7 +2,9 @@
 //! per-light, sequential answers (issue 15).
 
 use glam::DVec3;
-use lixel::optimize::{optimize_lights, OptimizeOptions, Optimizer, SampleOptions, SampleWorkspace};
+use lixel::optimize::{
+    optimize_lights, OptimizeOptions, OptimizeReport, Optimized, Optimizer, SampleOptions, SampleWorkspace,
+};
 use lixel::{Light, LightMatrix, LixelError, Samples};
 
 mod common;
@@ -102,6 +104,31 @@ fn parallel_optimization_equals_sequential() {
         prev = together.into_iter().map(|r| r.ok().map(|o| o.matrix)).collect();
         assert!(prev.iter().all(Option::is_some));
     }
+}
+
+/// `optimize_into` (one optimizer and one report reused across lights and
+/// frames, so the report's buffer holds another light's angles) gives what
+/// `optimize` gives, matrix and report, bit for bit.
+#[test]
+fn optimize_into_equals_optimize() {
+    let lights = lights();
+    let (problems, readback) = common::setup(&lights);
+    let samples =
+        Samples::from_readback_all(&problems, &readback.as_readback(false), &SampleOptions::default()).unwrap();
+    let mut prev: Vec<Option<LightMatrix>> = vec![None; samples.len()];
+    let mut reused = Optimizer::new(OptimizeOptions::default());
+    let mut report = OptimizeReport::default();
+    for _ in 0..3 {
+        for (samples, prev) in samples.iter().zip(&mut prev) {
+            let fresh = Optimizer::new(OptimizeOptions::default()).optimize(samples, prev.as_ref());
+            let into = reused
+                .optimize_into(samples, prev.as_ref(), &mut report)
+                .map(|matrix| Optimized { matrix, report: report.clone() });
+            assert_eq!(format!("{into:?}"), format!("{fresh:?}"));
+            *prev = into.ok().map(|o| o.matrix);
+        }
+    }
+    assert!(prev.iter().all(Option::is_some));
 }
 
 #[test]

@@ -4,7 +4,10 @@
 //! equals the same solve through a fresh uncached workspace and through
 //! `ShadowProblem::solve`, matrices and errors alike, over random cameras
 //! with hard lights: inside the receivers, far away, grazing a flat floor,
-//! along and against the view direction, spot lights (never cached).
+//! along and against the view direction, spot lights. The same holds for the
+//! per-light caches (caster bodies; a spot light's visible receivers): light
+//! by light through one workspace, through one workspace per light, and with
+//! the casters' bounds changed under the same light.
 
 use glam::DVec3;
 use lixel::{Aabb, Light, Parameterization, SceneBounds, ShadowProblem, SolveWorkspace};
@@ -78,6 +81,33 @@ fn cached_solves_are_bit_identical_to_uncached() {
                 errors += usize::from(uncached.is_err());
             }
         }
+        // Light by light, every method in turn through the shared workspace
+        // (its caster cache hits between methods sharing a body), three
+        // times through a workspace per light (bodies are kept from the
+        // second pass on, so the third hits every cache),
+        // and with the casters' bounds changed under the same light and
+        // receivers (the caster cache must miss).
+        let mut per_light: Vec<SolveWorkspace> = problems.iter().map(|_| SolveWorkspace::new()).collect();
+        let grown = |p: &ShadowProblem| {
+            let c = p.bounds().casters;
+            let bounds = SceneBounds { casters: Aabb { max: c.max + DVec3::splat(0.5), ..c }, ..*p.bounds() };
+            ShadowProblem::new(*p.camera(), *p.light(), bounds, p.map_size()).ok()
+        };
+        for _ in 0..3 {
+            for (problem, own) in problems.iter().zip(&mut per_light) {
+                let other = grown(problem);
+                for parameterization in Parameterization::ALL_DEFAULT {
+                    let uncached = bits(&problem.solve_with(&parameterization, &mut SolveWorkspace::uncached()));
+                    assert_eq!(bits(&problem.solve_with(&parameterization, &mut shared)), uncached, "case {i}");
+                    assert_eq!(bits(&problem.solve_with(&parameterization, own)), uncached, "case {i}, per light");
+                    if let Some(other) = &other {
+                        let expected = bits(&other.solve_with(&parameterization, &mut SolveWorkspace::uncached()));
+                        assert_eq!(bits(&other.solve_with(&parameterization, &mut shared)), expected, "case {i}");
+                    }
+                    compared += 1;
+                }
+            }
+        }
         // The public bodies agree too.
         for problem in &problems {
             let visible = problem.visible_receiver_body();
@@ -86,5 +116,5 @@ fn cached_solves_are_bit_identical_to_uncached() {
         }
     }
     eprintln!("{compared} solves compared, {errors} of them errors");
-    assert!(compared > cases * 60, "too few solves compared: {compared}");
+    assert!(compared > cases * 120, "too few solves compared: {compared}");
 }

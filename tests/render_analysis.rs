@@ -184,3 +184,25 @@ fn analysis_reuses_the_frames_maps_where_the_matrices_agree() {
     assert!(same >= 0.99, "light 1 agrees on {same:.4}");
     assert_ne!(bit(&mixed, 1), bit(&own, 1), "a 200² map draws different boundaries than a 1024² one");
 }
+
+/// `samples_all_into` (what `ShadowLoop` extracts with, into kept buffers)
+/// gives `samples_all`'s samples, with the buffers holding another camera's
+/// and another light count's samples before.
+#[test]
+fn samples_all_into_kept_buffers_equals_samples_all() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let lights = test_lights();
+    let map = lixel::ShadowMapSize::square(1024);
+    let (mut kept, mut workspace, mut bits) = (Vec::new(), lixel::optimize::SampleWorkspace::new(), Vec::new());
+    for (name, camera) in cameras() {
+        for count in [lights.len(), 1] {
+            let lights = &lights[..count];
+            let readback = analysis(&device, &queue, &scene, &camera, lights, AnalysisSource::CameraDepth);
+            let fresh = readback.samples_all(lights, scene.bounds(), map);
+            readback.samples_all_into(lights, scene.bounds(), map, &mut kept, &mut workspace, &mut bits).unwrap();
+            let fresh: Vec<_> = fresh.into_iter().map(Result::unwrap).collect();
+            assert_eq!(format!("{kept:?}"), format!("{fresh:?}"), "{name}, {count} lights");
+        }
+    }
+}

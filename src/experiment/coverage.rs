@@ -194,6 +194,24 @@ impl VisibilityError {
         Self::of(|i| bitmask::visibility(occluded[i], samples), truth, coverage, samples)
     }
 
+    /// The error of a supersampled standard lookup
+    /// ([`ShadowLookup::Supersampled`](crate::render::ShadowLookup::Supersampled)):
+    /// its share of lit sub-samples among those facing the light, the
+    /// truth's own estimator with the depth compare for the shadow ray; a
+    /// pixel none of whose sub-samples faces the light takes the centre
+    /// pass's bit (`masks`), as the truth takes its centre's.
+    #[must_use]
+    pub fn of_supersampled(
+        words: &crate::render::subpixel::supersample::SupersampledWords,
+        masks: &ShadowMasks,
+        truth: &ShadowMasks,
+        coverage: &Coverage,
+        samples: AaSamples,
+    ) -> Self {
+        let centre = |i: usize| if masks.shadow.get(i).is_some_and(|s| s & 1 != 0) { 0.0 } else { 1.0 };
+        Self::of(|i| words.visibility(i).unwrap_or_else(|| centre(i)), truth, coverage, samples)
+    }
+
     /// The error of a standard lookup's masks: visibility 0 where its
     /// shadow bit is set, 1 elsewhere.
     #[must_use]

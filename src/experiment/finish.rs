@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::images::{error_overlay, Picture};
 use super::report::{self, Equivalence, Summary};
 use super::rows::ConfigRow;
-use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodSpec, Runner};
+use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodSpec, RunStage, Runner};
 
 /// How complete the rows of a report are.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -69,9 +69,13 @@ pub(super) fn finish(
         report::write_shard(dir, config, rows, &summary)?;
         return Ok(summary);
     }
+    let lap = Instant::now();
     let equivalence = equivalence(runner, config)?;
+    let lap = runner.stages.lap(RunStage::Equivalence, lap);
     let pictures = extremes(runner, config, rows)?;
+    runner.stages.lap(RunStage::Pictures, lap);
     let mut summary = report::summarize(config, rows, equivalence, started.elapsed(), warnings);
+    summary.stages = runner.stages().clone();
     summary.missing.clone_from(&completeness.missing);
     summary.adapter.clone_from(&completeness.adapter);
     report::write_all(dir, config, rows, &summary, &pictures, completeness)?;
@@ -89,15 +93,23 @@ fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equ
     if count == 0 || !config.methods.contains(&MethodSpec::OPTIMIZED) {
         return Ok((Vec::new(), Vec::new()));
     }
-    let mut ladder = Vec::new();
-    for &size in &config.equivalence_ladder {
-        ladder.push((size, runner.mean_at_resolution(MethodSpec::FOCUSED, size, count)?));
-    }
-    let mut result = Vec::new();
-    for size in [400u32, 1024] {
-        let mean = runner.mean_at_resolution(MethodSpec::OPTIMIZED, size, count)?;
-        result.push((size, mean, report::crossing(&ladder, mean)));
-    }
+    // One pass over the configurations: each truth is traced once for the
+    // whole ladder and both optimized sizes.
+    const OPTIMIZED_SIZES: [u32; 2] = [400, 1024];
+    let runs: Vec<(MethodSpec, u32)> = config
+        .equivalence_ladder
+        .iter()
+        .map(|&size| (MethodSpec::FOCUSED, size))
+        .chain(OPTIMIZED_SIZES.iter().map(|&size| (MethodSpec::OPTIMIZED, size)))
+        .collect();
+    let means = runner.means_at_resolutions(&runs, count)?;
+    let (focused, optimized) = means.split_at(config.equivalence_ladder.len());
+    let ladder: Vec<(u32, f64)> = config.equivalence_ladder.iter().copied().zip(focused.iter().copied()).collect();
+    let result = OPTIMIZED_SIZES
+        .iter()
+        .zip(optimized)
+        .map(|(&size, &mean)| (size, mean, report::crossing(&ladder, mean)))
+        .collect();
     Ok((result, ladder))
 }
 
@@ -108,7 +120,10 @@ fn extremes(
     config: &ExperimentConfig,
     rows: &[ConfigRow],
 ) -> Result<Vec<Picture>, ExperimentError> {
-    let mut pictures = Vec::new();
+    // Every (method, which, configuration) pick first, then one truth per
+    // distinct configuration (a ray-cast truth costs more than a render, and
+    // methods often share their best or worst configuration).
+    let mut picks: Vec<(MethodSpec, &'static str, usize)> = Vec::new();
     for &m in &config.methods {
         let mut by_error: Vec<(u64, usize)> =
             rows.iter().filter(|r| r.method == m).filter_map(|r| Some((r.misclassified?, r.config))).collect();
@@ -116,29 +131,31 @@ fn extremes(
             continue;
         }
         by_error.sort_unstable();
-        let picks = [
-            ("best", by_error[0].1),
-            ("median", by_error[by_error.len() / 2].1),
-            ("worst", by_error[by_error.len() - 1].1),
-        ];
-        for (which, index) in picks {
-            let light = light_for(config, runner.scene(), index);
-            let (ray, focused) = runner.truths(light)?;
-            let Some(truth) = ray.or(focused) else { continue };
-            let problem = runner.problem(light, config.map)?;
-            let nearest = nearest_view_depth(runner.camera(), &truth);
+        picks.push((m, "best", by_error[0].1));
+        picks.push((m, "median", by_error[by_error.len() / 2].1));
+        picks.push((m, "worst", by_error[by_error.len() - 1].1));
+    }
+    let mut configs: Vec<usize> = picks.iter().map(|p| p.2).collect();
+    configs.sort_unstable();
+    configs.dedup();
+    let mut made: Vec<(usize, Picture)> = Vec::new();
+    for index in configs {
+        let light = light_for(config, runner.scene(), index);
+        let (ray, focused) = runner.truths(light)?;
+        let Some(truth) = ray.or(focused) else { continue };
+        let problem = runner.problem(light, config.map)?;
+        let nearest = nearest_view_depth(runner.camera(), &truth);
+        for (order, &(m, which, _)) in picks.iter().enumerate().filter(|(_, p)| p.2 == index) {
             let Ok((matrix, _, _)) = runner.matrix(m, &problem, nearest) else { continue };
             let masks = runner.masks_with(&matrix, m.lookup())?;
             let misclassified = Counts::compare(&masks, &truth).misclassified();
-            pictures.push(Picture {
-                method: m,
-                which,
-                config: index,
-                misclassified,
-                image: error_overlay(&masks, &truth),
-            });
+            let image = error_overlay(&masks, &truth);
+            made.push((order, Picture { method: m, which, config: index, misclassified, image }));
         }
     }
+    // Back in method order, best, median, worst.
+    made.sort_by_key(|(order, _)| *order);
+    let pictures: Vec<Picture> = made.into_iter().map(|(_, p)| p).collect();
     Ok(pictures)
 }
 

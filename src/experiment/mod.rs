@@ -29,6 +29,7 @@ mod rows;
 mod rundir;
 mod shard;
 pub mod stability;
+mod stages;
 mod timing;
 
 use std::path::PathBuf;
@@ -54,6 +55,7 @@ pub use report::{markdown, MethodSummary, Summary};
 pub use rows::ConfigRow;
 pub use rundir::{report_dir, write_atomic};
 pub use shard::{Shard, ShardError};
+pub use stages::{RunStage, RunStages};
 pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
 
 /// Which ground truth the counts use.
@@ -474,6 +476,7 @@ pub struct Runner<'a> {
     camera: Camera,
     caster: Option<RayCaster>,
     renderer: Renderer,
+    stages: RunStages,
 }
 
 impl std::fmt::Debug for Runner<'_> {
@@ -518,8 +521,11 @@ impl<'a> Runner<'a> {
         let camera = camera_for(config, &scene)?;
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
         let options = experiment_renderer_options();
-        let renderer = Renderer::new(device, queue, &scene, options)?;
-        Ok(Self { config, scene, camera, caster, renderer })
+        let mut renderer = Renderer::new(device, queue, &scene, options)?;
+        // Every configuration and method sees the scene through this one
+        // camera: draw it once, shade the capture per method (same masks).
+        renderer.capture_view(&camera)?;
+        Ok(Self { config, scene, camera, caster, renderer, stages: RunStages::default() })
     }
 
     /// The camera.
@@ -532,6 +538,12 @@ impl<'a> Runner<'a> {
     #[must_use]
     pub fn scene(&self) -> &Scene {
         &self.scene
+    }
+
+    /// Wall time per stage so far.
+    #[must_use]
+    pub fn stages(&self) -> &RunStages {
+        &self.stages
     }
 
     /// The problem of one light at map size `map`.
@@ -653,6 +665,7 @@ impl<'a> Runner<'a> {
         let start = Instant::now();
         let light = light_for(self.config, &self.scene, index);
         let (ray, focused_truth) = self.truths(light)?;
+        let mut lap = self.stages.lap(RunStage::Truth, start);
         let truth_disagreement = match (&ray, &focused_truth) {
             (Some(a), Some(b)) => {
                 let c = Counts::compare(b, a);
@@ -666,21 +679,32 @@ impl<'a> Runner<'a> {
             (Some(centre), Some(caster), Some(_)) => Some(Coverage::trace(caster, &self.camera, &light, centre)),
             _ => None,
         };
+        lap = self.stages.lap(RunStage::Coverage, lap);
         let truth = ray.or(focused_truth).ok_or_else(|| ExperimentError::Config("no ground truth".into()))?;
         // What a depth readback supplies to PSM: the nearest visible depth.
         let nearest = nearest_view_depth(&self.camera, &truth);
         let problem = self.problem(light, self.config.map)?;
         let mut results = Vec::new();
         for &method in &self.config.methods {
-            let result = match self.matrix(method, &problem, nearest) {
+            let solved = self.matrix(method, &problem, nearest);
+            lap = self.stages.lap(RunStage::Matrices, lap);
+            let result = match solved {
                 Ok((m, frames, note)) => {
                     let masks = self.masks_with(&m, method.lookup())?;
+                    lap = self.stages.lap(RunStage::Lookups, lap);
                     // `+aaN`: the renderer's occlusion words against the truth
                     // of the same N sub-samples; others: the shadow bit.
                     let visibility = match (coverage.as_ref(), samples, method.lookup()) {
                         (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
                             Some(VisibilityError::of_occlusion(&self.renderer.read_occlusion(0)?, &truth, c, n))
                         }
+                        (Some(c), Some(_), ShadowLookup::Supersampled(n)) => Some(VisibilityError::of_supersampled(
+                            &self.renderer.read_supersampled(0)?,
+                            &masks,
+                            &truth,
+                            c,
+                            n,
+                        )),
                         (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
                         _ => None,
                     };
@@ -701,13 +725,9 @@ impl<'a> Runner<'a> {
                         }
                         _ => note,
                     };
-                    MethodResult {
-                        matrix: Some(m),
-                        counts: Some(Counts::compare(&masks, &truth)),
-                        visibility,
-                        frames,
-                        note,
-                    }
+                    let counts = Some(Counts::compare(&masks, &truth));
+                    lap = self.stages.lap(RunStage::Compare, lap);
+                    MethodResult { matrix: Some(m), counts, visibility, frames, note }
                 }
                 Err(ExperimentError::Solver(e)) => {
                     MethodResult { matrix: None, counts: None, visibility: None, frames: 0, note: e.to_string() }
@@ -725,20 +745,38 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn mean_at_resolution(&mut self, method: MethodSpec, map: u32, count: usize) -> Result<f64, ExperimentError> {
-        let mut total = 0.0;
-        let mut n = 0usize;
+        Ok(self.means_at_resolutions(&[(method, map)], count)?[0])
+    }
+
+    /// [`mean_at_resolution`](Self::mean_at_resolution) for several
+    /// (method, map size) runs at once: each configuration's truth is
+    /// computed once and shared by every run (the ladder has a dozen sizes),
+    /// and each run's sum is taken in configuration order, so the means are
+    /// bit-identical to one run at a time. `NaN` for a run no configuration
+    /// could solve.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn means_at_resolutions(
+        &mut self,
+        runs: &[(MethodSpec, u32)],
+        count: usize,
+    ) -> Result<Vec<f64>, ExperimentError> {
+        let mut sums = vec![(0.0f64, 0usize); runs.len()];
         for index in 0..count {
             let light = light_for(self.config, &self.scene, index);
             let (ray, focused_truth) = self.truths(light)?;
             let Some(truth) = ray.or(focused_truth) else { continue };
             let nearest = nearest_view_depth(&self.camera, &truth);
-            let problem = self.problem(light, map)?;
-            if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
-                total += Counts::compare(&self.masks_with(&m, method.lookup())?, &truth).misclassified() as f64;
-                n += 1;
+            for (&(method, map), (total, n)) in runs.iter().zip(&mut sums) {
+                let problem = self.problem(light, map)?;
+                if let Ok((m, _, _)) = self.matrix(method, &problem, nearest) {
+                    *total += Counts::compare(&self.masks_with(&m, method.lookup())?, &truth).misclassified() as f64;
+                    *n += 1;
+                }
             }
         }
-        Ok(if n == 0 { f64::NAN } else { total / n as f64 })
+        Ok(sums.into_iter().map(|(total, n)| if n == 0 { f64::NAN } else { total / n as f64 }).collect())
     }
 }
 

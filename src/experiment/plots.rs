@@ -255,6 +255,7 @@ mod tests {
             warnings: Vec::new(),
             missing: Vec::new(),
             adapter: String::new(),
+            stages: super::super::RunStages::default(),
         };
         let path = dir.join("equivalence.png");
         equivalence(&path, &summary).unwrap();

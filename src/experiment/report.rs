@@ -12,7 +12,7 @@ use super::finish::{equivalence_count, Completeness};
 use super::images::{self, Picture};
 use super::rows::{csv_text, ConfigRow};
 use super::rundir::write_atomic;
-use super::{plots, ExperimentConfig, ExperimentError, MethodSpec};
+use super::{plots, ExperimentConfig, ExperimentError, MethodSpec, RunStages};
 
 /// Per-method statistics.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +60,8 @@ pub struct Summary {
     pub missing: Vec<usize>,
     /// The adapter and backend it ran on (e.g. `llvmpipe (...) (vulkan)`).
     pub adapter: String,
+    /// Wall time per stage of this process's work (zero for a merge).
+    pub stages: RunStages,
 }
 
 /// The resolution-equivalence figures (empty when disabled).
@@ -170,6 +172,7 @@ pub(super) fn summarize(
         warnings,
         missing: Vec::new(),
         adapter: String::new(),
+        stages: RunStages::default(),
     }
 }
 
@@ -344,6 +347,12 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
             let _ = writeln!(md, "- {} {which}: ![{file}](images/{file})", m.name());
         }
     }
+    let stages = summary.stages.markdown(summary.elapsed);
+    if !stages.is_empty() {
+        let _ = writeln!(md, "\n## Where the time went\n");
+        let _ = writeln!(md, "Wall time of this process's work per stage (a resumed run counts only what it ran).\n");
+        md.push_str(&stages);
+    }
     md
 }
 
@@ -366,6 +375,7 @@ mod tests {
             warnings: vec!["a warning".into()],
             missing: vec![3],
             adapter: String::new(),
+            stages: RunStages::default(),
         };
         let md = markdown(&config, &summary, &[]);
         assert!(md.contains("Resolution equivalence (first 6 configurations)"), "{md}");

@@ -26,6 +26,8 @@ pub struct ClipWorkspace {
     /// Per new vertex: on the plane (kept within `eps` of it, or a cut point).
     on_plane: Vec<bool>,
     pub(super) edges: IndexMap<(usize, usize), usize>,
+    /// The half-edges by start vertex (the silhouette's face lookup).
+    pub(super) half_edges: HalfEdges,
     walker: LoopWalker,
     pub(super) flags: Vec<bool>,
     pub(super) silhouette: Vec<(usize, usize, usize, usize)>,
@@ -203,6 +205,54 @@ pub(super) fn half_edge_faces(map: &mut IndexMap<(usize, usize), usize>, faces: 
     map.clear();
     for (i, face) in faces.iter().enumerate() {
         map.extend(loop_edges(&indices[face.start..face.end]).map(|edge| (edge, i)));
+    }
+}
+
+/// The directed edges of a body's faces grouped by start vertex (counting
+/// sort, no hashing): the face of edge `a → b` is found among the few edges
+/// leaving `a`.
+#[derive(Clone, Debug, Default)]
+pub(super) struct HalfEdges {
+    /// Edges leaving vertex `a`: `to_face[start[a]..start[a + 1]]`.
+    start: Vec<usize>,
+    /// `(b, face)` per directed edge `a → b`, in face order within each `a`.
+    to_face: Vec<(usize, usize)>,
+}
+
+impl HalfEdges {
+    /// Rebuilds for `faces` over `vertex_count` vertices.
+    pub(super) fn build(&mut self, vertex_count: usize, faces: &[FaceSpan], indices: &[usize]) {
+        // Every index is a vertex of the body; the bound only keeps a
+        // malformed body from indexing out of range.
+        let vertex_count = indices.iter().map(|&i| i + 1).max().unwrap_or(0).max(vertex_count);
+        let start = &mut self.start;
+        start.clear();
+        start.resize(vertex_count + 2, 0);
+        for face in faces {
+            for (a, _) in loop_edges(&indices[face.start..face.end]) {
+                start[a + 2] += 1;
+            }
+        }
+        for i in 2..start.len() {
+            start[i] += start[i - 1];
+        }
+        // `start[a + 1]` is now where `a`'s edges begin; used as the fill
+        // cursor it ends where they end, i.e. where `a + 1`'s begin.
+        self.to_face.clear();
+        self.to_face.resize(start[vertex_count + 1], (0, 0));
+        for (f, face) in faces.iter().enumerate() {
+            for (a, b) in loop_edges(&indices[face.start..face.end]) {
+                self.to_face[start[a + 1]] = (b, f);
+                start[a + 1] += 1;
+            }
+        }
+    }
+
+    /// The face of directed edge `a → b`; the last one listed if several
+    /// faces run it (what a map filled in face order would hold).
+    pub(super) fn face(&self, a: usize, b: usize) -> Option<usize> {
+        let range = self.start.get(a).copied()?..self.start.get(a + 1).copied()?;
+        self.to_face[range].iter().rev().find(|&&(to, _)| to == b).map(|&(_, face)| face)
     }
 }
 

@@ -8,7 +8,7 @@
 
 use glam::DVec3;
 
-use super::clip::{half_edge_faces, loop_edges, ClipWorkspace, IndexMap, LoopWalker};
+use super::clip::{half_edge_faces, loop_edges, ClipWorkspace, HalfEdges, IndexMap, LoopWalker};
 use super::{accurate_cross, default_eps, Plane};
 
 /// The faces of a box or frustum as loops of corner indices.
@@ -122,6 +122,23 @@ impl ConvexPolyhedron {
         self.vertices.clone_from(&other.vertices);
         self.faces.clone_from(&other.faces);
         self.indices.clone_from(&other.indices);
+    }
+
+    /// Whether `other` is the same body bit for bit: vertices, face loops
+    /// and face planes (`-0.0` differs from `0.0`; a NaN equals itself).
+    /// Whatever is computed from a body alone is the same for both.
+    pub(crate) fn bit_eq(&self, other: &Self) -> bool {
+        let bits = |v: &DVec3| v.to_array().map(f64::to_bits);
+        self.indices == other.indices
+            && self.vertices.len() == other.vertices.len()
+            && self.faces.len() == other.faces.len()
+            && self.vertices.iter().zip(&other.vertices).all(|(a, b)| bits(a) == bits(b))
+            && self.faces.iter().zip(&other.faces).all(|(a, b)| {
+                a.start == b.start
+                    && a.end == b.end
+                    && bits(&a.plane.normal) == bits(&b.plane.normal)
+                    && a.plane.offset.to_bits() == b.plane.offset.to_bits()
+            })
     }
 
     /// The vertices, indexed by [`Face::indices`].
@@ -468,7 +485,7 @@ impl ConvexPolyhedron {
         if self.is_empty() || !p.is_finite() {
             return;
         }
-        let ClipWorkspace { flags: sees_p, edges, silhouette, .. } = workspace;
+        let ClipWorkspace { flags: sees_p, half_edges: edges, silhouette, .. } = workspace;
         sees_p.clear();
         sees_p.extend(self.planes().map(|plane| plane.signed_distance(p) > eps));
         planes.extend(self.planes().zip(sees_p.iter()).filter(|&(_, &sees)| !sees).map(|(plane, _)| plane));
@@ -590,7 +607,7 @@ impl ConvexPolyhedron {
             }
             return;
         };
-        let ClipWorkspace { flags: swept, edges, silhouette, .. } = workspace;
+        let ClipWorkspace { flags: swept, half_edges: edges, silhouette, .. } = workspace;
         swept.clear();
         swept.extend(self.planes().map(|plane| plane.normal.dot(dir) > 0.0));
         planes.extend(self.planes().zip(swept.iter()).filter(|&(_, &s)| !s).map(|(plane, _)| plane));
@@ -640,18 +657,13 @@ impl ConvexPolyhedron {
     /// reverse `(b, a)` belongs to a face not marked, as
     /// `(a, b, removed face, other face)`, into `out`; `edge_faces` is
     /// scratch.
-    fn silhouette(
-        &self,
-        removed: &[bool],
-        edge_faces: &mut IndexMap<(usize, usize), usize>,
-        out: &mut Vec<(usize, usize, usize, usize)>,
-    ) {
-        half_edge_faces(edge_faces, &self.faces, &self.indices);
+    fn silhouette(&self, removed: &[bool], edge_faces: &mut HalfEdges, out: &mut Vec<(usize, usize, usize, usize)>) {
+        edge_faces.build(self.vertices.len(), &self.faces, &self.indices);
         out.clear();
         for (f, face) in self.faces().enumerate().filter(|&(f, _)| removed[f]) {
             for (a, b) in face.edges() {
-                match edge_faces.get(&(b, a)) {
-                    Some(&across) if !removed[across] => out.push((a, b, f, across)),
+                match edge_faces.face(b, a) {
+                    Some(across) if !removed[across] => out.push((a, b, f, across)),
                     _ => {}
                 }
             }
@@ -1103,6 +1115,54 @@ mod tests {
             }
         }
         assert!(cuts > 1000);
+    }
+
+    /// The silhouette's half-edge lookup (grouped by start vertex) finds
+    /// the same face as a map of every directed edge filled in face order,
+    /// for every vertex pair of random clipped bodies, on faces with a
+    /// repeated edge (the last face wins) and out of range.
+    #[test]
+    fn half_edges_equal_the_edge_map() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut half, mut map, mut workspace) = (HalfEdges::default(), IndexMap::default(), ClipWorkspace::default());
+        let mut check = |body: &ConvexPolyhedron, half: &mut HalfEdges| {
+            half.build(body.vertices.len(), &body.faces, &body.indices);
+            half_edge_faces(&mut map, &body.faces, &body.indices);
+            let n = body.vertices.len() + 2;
+            for a in 0..n {
+                for b in 0..n {
+                    assert_eq!(half.face(a, b), map.get(&(a, b)).copied(), "edge {a} -> {b}");
+                }
+            }
+        };
+        for _ in 0..100 {
+            let mut body = unit_cube();
+            for _ in 0..8 {
+                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+                let Some(n) = n.try_normalize() else { continue };
+                let plane = Plane::from_point_normal(body.centroid() + n * (random() - 0.5) * 0.5, n);
+                let mut next = ConvexPolyhedron::empty();
+                body.clip_into(&plane, 1e-9, &mut next, &mut workspace);
+                if next.is_empty() {
+                    break;
+                }
+                body = next;
+                check(&body, &mut half);
+            }
+        }
+        // A directed edge run by two faces: the map keeps the later face.
+        let mut doubled = unit_cube();
+        let first = doubled.faces[0];
+        let start = doubled.indices.len();
+        doubled.indices.extend_from_within(first.start..first.end);
+        doubled.faces.push(FaceSpan { plane: first.plane, start, end: doubled.indices.len() });
+        check(&doubled, &mut half);
     }
 
     #[test]

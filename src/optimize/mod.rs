@@ -234,7 +234,8 @@ pub fn optimize_lights(
 }
 
 /// The optimizer with reusable buffers: once they have grown to the largest
-/// sample set seen, a call allocates only its report's
+/// sample set seen, [`optimize_into`](Self::optimize_into) allocates nothing
+/// and [`optimize`](Self::optimize) only its report's
 /// [`angles_tried`](OptimizeReport::angles_tried) (once, at its final size;
 /// `tests/optimize_memory.rs` counts).
 #[derive(Clone, Debug)]
@@ -248,6 +249,8 @@ pub struct Optimizer {
     sorted: Vec<DVec2>,
     hull: Vec<DVec2>,
     units: Vec<DVec3>,
+    /// The spare buffer of [`optimize_into`](Self::optimize_into)'s reports.
+    angles: Vec<f64>,
 }
 
 /// A candidate axis with its fitted homography (NDC) and objective.
@@ -271,6 +274,7 @@ impl Optimizer {
             sorted: Vec::new(),
             hull: Vec::new(),
             units: Vec::new(),
+            angles: Vec::new(),
         }
     }
 
@@ -305,19 +309,59 @@ impl Optimizer {
     /// the visible receivers), or [`LixelError::UnusableSamples`] when the
     /// relevant samples surround a point light.
     pub fn optimize(&mut self, samples: &Samples, prev: Option<&LightMatrix>) -> Result<Optimized> {
+        let mut report = OptimizeReport::default();
+        let matrix = self.optimize_report(samples, prev, &mut report)?;
+        Ok(Optimized { matrix, report })
+    }
+
+    /// [`optimize`](Self::optimize), writing the report into `report` and
+    /// reusing its [`angles_tried`](OptimizeReport::angles_tried) buffer:
+    /// once warm, a call allocates nothing (`tests/optimize_memory.rs`
+    /// counts). Matrix and report are the same as `optimize`'s; on error
+    /// `report` is left as it was.
+    ///
+    /// # Errors
+    /// As [`optimize`](Self::optimize).
+    pub fn optimize_into(
+        &mut self,
+        samples: &Samples,
+        prev: Option<&LightMatrix>,
+        report: &mut OptimizeReport,
+    ) -> Result<LightMatrix> {
+        // Two angle buffers take turns: the one in `report` until this call
+        // succeeds, and the optimizer's spare.
+        let mut fresh = OptimizeReport { angles_tried: std::mem::take(&mut self.angles), ..OptimizeReport::default() };
+        fresh.angles_tried.clear();
+        match self.optimize_report(samples, prev, &mut fresh) {
+            Ok(matrix) => {
+                self.angles = std::mem::replace(report, fresh).angles_tried;
+                Ok(matrix)
+            }
+            Err(e) => {
+                self.angles = fresh.angles_tried;
+                Err(e)
+            }
+        }
+    }
+
+    /// The body of [`optimize`](Self::optimize), filling `report` (given
+    /// empty but for its angle buffer's capacity).
+    fn optimize_report(
+        &mut self,
+        samples: &Samples,
+        prev: Option<&LightMatrix>,
+        report: &mut OptimizeReport,
+    ) -> Result<LightMatrix> {
         let focused = samples.focused.clone()?;
-        let mut report = OptimizeReport {
-            boundary_samples: samples.boundary.len(),
-            relevant_samples: samples.relevant.len(),
-            ..OptimizeReport::default()
-        };
+        report.boundary_samples = samples.boundary.len();
+        report.relevant_samples = samples.relevant.len();
         if samples.relevant.is_empty() || samples.boundary.is_empty() {
             report.fallback = Some(Fallback::NoUsableSamples);
             report.accepted = true;
             let mut matrix = focused;
             matrix.method = Method::Optimized;
             matrix.fallback = Some(Fallback::NoUsableSamples);
-            return Ok(Optimized { matrix, report });
+            return Ok(matrix);
         }
         self.find_extreme_rays(samples)?;
         let frame = samples.frame;
@@ -342,9 +386,9 @@ impl Optimizer {
         };
         report.objective_start = start.objective;
         let best = match self.options.strategy {
-            SearchStrategy::Paper => search::paper(self, samples, start, &mut report),
+            SearchStrategy::Paper => search::paper(self, samples, start, report),
             SearchStrategy::NelderMead { max_iterations } => {
-                search::nelder_mead(self, samples, start, max_iterations, &mut report)
+                search::nelder_mead(self, samples, start, max_iterations, report)
             }
         };
         report.objective_new = best.objective;
@@ -415,13 +459,13 @@ impl Optimizer {
         // rays it was fitted to): otherwise the other matrix, else the
         // focused one.
         if self.holds_samples(samples, &matrix) {
-            return Ok(Optimized { matrix, report });
+            return Ok(matrix);
         }
         if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
             report.accepted = !report.accepted;
             report.snapped = false;
             report.held = false;
-            return Ok(Optimized { matrix: other, report });
+            return Ok(other);
         }
         report.fallback = Some(Fallback::NoUsableSamples);
         report.snapped = false;
@@ -429,7 +473,7 @@ impl Optimizer {
         let mut matrix = focused;
         matrix.method = Method::Optimized;
         matrix.fallback = Some(Fallback::NoUsableSamples);
-        Ok(Optimized { matrix, report })
+        Ok(matrix)
     }
 
     /// Whether `matrix` is finite and holds every relevant sample, checked

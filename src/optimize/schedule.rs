@@ -195,23 +195,72 @@ impl ShadowScheduler {
         let one = |(state, samples): (&mut LightState, Result<Samples>)| {
             samples.and_then(|samples| state.update(&samples, frame).cloned())
         };
-        #[cfg(feature = "rayon")]
-        {
-            use rayon::prelude::*;
-            Ok(self.lights.par_iter_mut().zip(samples).map(one).collect())
+        self.update_each(samples, one)
+    }
+
+    /// [`Self::update_all`] with every light's samples present (borrowed:
+    /// an engine keeps them and extracts into them with
+    /// [`Samples::from_readback_all_into`]). The results equal
+    /// `update_all` given the same samples.
+    ///
+    /// # Errors
+    /// As [`Self::update_all`].
+    pub fn update_all_from(&mut self, samples: &[Samples], frame: u64) -> Result<Vec<Result<OptimizeReport>>> {
+        if samples.len() != self.lights.len() {
+            return Err(LixelError::UnusableSamples { reason: "one sample set per light" });
         }
-        #[cfg(not(feature = "rayon"))]
-        {
-            Ok(self.lights.iter_mut().zip(samples).map(one).collect())
-        }
+        let one = |(state, samples): (&mut LightState, &Samples)| state.update(samples, frame).cloned();
+        self.update_each(samples, one)
+    }
+
+    /// Runs `one` for every light and its samples (in parallel with rayon).
+    #[cfg(feature = "rayon")]
+    fn update_each<S, I>(
+        &mut self,
+        samples: I,
+        one: impl Fn((&mut LightState, S)) -> Result<OptimizeReport> + Send + Sync,
+    ) -> Result<Vec<Result<OptimizeReport>>>
+    where
+        I: rayon::iter::IntoParallelIterator<Item = S>,
+        I::Iter: rayon::iter::IndexedParallelIterator,
+        S: Send,
+    {
+        use rayon::prelude::*;
+        Ok(self.lights.par_iter_mut().zip(samples).map(one).collect())
+    }
+
+    /// Runs `one` for every light and its samples.
+    #[cfg(not(feature = "rayon"))]
+    fn update_each<S, I>(
+        &mut self,
+        samples: I,
+        one: impl Fn((&mut LightState, S)) -> Result<OptimizeReport>,
+    ) -> Result<Vec<Result<OptimizeReport>>>
+    where
+        I: IntoIterator<Item = S>,
+    {
+        Ok(self.lights.iter_mut().zip(samples).map(one).collect())
     }
 }
 
 impl LightState {
+    /// Optimizes into the last report's buffers (`Optimizer::optimize_into`);
+    /// on error the state, last report included, is unchanged.
     fn update(&mut self, samples: &Samples, frame: u64) -> Result<&OptimizeReport> {
-        let optimized = self.optimizer.optimize(samples, self.matrix.as_ref())?;
-        self.matrix = Some(optimized.matrix);
-        self.optimized_frame = Some(frame);
-        Ok(self.last_report.insert(optimized.report))
+        let had_report = self.last_report.is_some();
+        let mut report = self.last_report.take().unwrap_or_default();
+        match self.optimizer.optimize_into(samples, self.matrix.as_ref(), &mut report) {
+            Ok(matrix) => {
+                self.matrix = Some(matrix);
+                self.optimized_frame = Some(frame);
+                Ok(self.last_report.insert(report))
+            }
+            Err(e) => {
+                if had_report {
+                    self.last_report = Some(report);
+                }
+                Err(e)
+            }
+        }
     }
 }

@@ -79,14 +79,23 @@ impl AnalysisReadback {
     /// it (shadowed, or facing away, as a shadow-map test finds it).
     #[must_use]
     pub fn optimizer_bits(&self) -> Vec<u32> {
+        let mut bits = Vec::new();
+        self.optimizer_bits_into(&mut bits);
+        bits
+    }
+
+    /// [`optimizer_bits`](Self::optimizer_bits) into `out` (its buffer reused).
+    pub fn optimizer_bits_into(&self, out: &mut Vec<u32>) {
         let masks = &self.masks;
-        masks
-            .shadow
-            .iter()
-            .zip(&masks.facing)
-            .enumerate()
-            .map(|(i, (&s, &f))| if masks.visible(i) { s | !f } else { 0 })
-            .collect()
+        out.clear();
+        out.extend(
+            masks
+                .shadow
+                .iter()
+                .zip(&masks.facing)
+                .enumerate()
+                .map(|(i, (&s, &f))| if masks.visible(i) { s | !f } else { 0 }),
+        );
     }
 
     /// The optimizer's input, with `bits` from [`optimizer_bits`](Self::optimizer_bits).
@@ -146,6 +155,36 @@ impl AnalysisReadback {
                 .map(|i| Self::samples_from(&input, self.camera, lights[i], bounds, map, i as u32))
                 .collect(),
         }
+    }
+
+    /// [`samples_all`](Self::samples_all) into kept buffers: `out` (the
+    /// previous call's samples), `workspace` and `bits` (the shadow bits)
+    /// are reused, so that an engine's analysis frames stop allocating per
+    /// light ([`Samples::from_readback_all_into`](crate::Samples::from_readback_all_into)).
+    /// On success `out[i]` equals `samples_all(..)[i]`.
+    ///
+    /// # Errors
+    /// When some light's problem cannot be built or the extraction refuses;
+    /// `out` is then left as it was, and [`samples_all`](Self::samples_all)
+    /// gives each light its own samples or error.
+    pub fn samples_all_into(
+        &self,
+        lights: &[crate::Light],
+        bounds: crate::SceneBounds,
+        map: crate::ShadowMapSize,
+        out: &mut Vec<crate::Samples>,
+        workspace: &mut crate::optimize::SampleWorkspace,
+        bits: &mut Vec<u32>,
+    ) -> crate::Result<()> {
+        let lights = &lights[..lights.len().min(crate::MAX_LIGHTS)];
+        let problems: Vec<_> = lights
+            .iter()
+            .map(|&light| crate::ShadowProblem::new(self.camera, light, bounds, map))
+            .collect::<crate::Result<_>>()?;
+        self.optimizer_bits_into(bits);
+        let input = self.optimizer_input(bits);
+        let options = crate::optimize::SampleOptions::default();
+        crate::Samples::from_readback_all_into(&problems, &input, &options, out, workspace)
     }
 
     fn samples_from(

@@ -3,6 +3,7 @@
 //! ring. [`Renderer::render`](super::Renderer::render) prepares the
 //! resources and uniforms and calls these in order.
 
+use super::capture::ViewCapture;
 use super::lookup::{DepthClip, LookupState};
 use super::uniforms::SHADOW_SLOT_STRIDE;
 use super::{analysis, culling, timing, AnalysisSource, Renderer};
@@ -137,9 +138,27 @@ impl Renderer {
         state: &LookupState,
         camera: &Camera,
         output: CameraOutput,
+        capture: Option<&ViewCapture>,
         timer: Option<&timing::FrameQueries>,
     ) -> u64 {
         let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
+        self.encode_camera_pass_into(encoder, state, &camera.clip_from_world(), targets, output, capture, timer)
+    }
+
+    /// The camera pass into `targets`, culling with `clip_from_world` (the
+    /// supersampled mode's jittered passes draw into targets of their own;
+    /// the camera uniforms must hold the same matrix).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode_camera_pass_into(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &LookupState,
+        clip_from_world: &glam::DMat4,
+        targets: &super::passes::CameraTargets,
+        output: CameraOutput,
+        capture: Option<&ViewCapture>,
+        timer: Option<&timing::FrameQueries>,
+    ) -> u64 {
         let bg = self.options.background.as_dvec3();
         let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
             view: &targets.color.view,
@@ -163,13 +182,46 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        pass.set_bind_group(0, &self.camera_bindings.bind_group, &[]);
+        pass.set_bind_group(1, &state.maps.bind_group, &[]);
+        if let (Some(capture), Some(deferred)) = (capture, state.camera.deferred_built()) {
+            pass.set_pipeline(match output {
+                CameraOutput::Color => &deferred.color,
+                CameraOutput::ColorAndMasks => &deferred.color_masks,
+            });
+            pass.set_bind_group(2, &capture.bind_group, &[]);
+            pass.draw(0..3, 0..1);
+            return 0;
+        }
         pass.set_pipeline(match output {
             CameraOutput::Color => &state.camera.color,
             CameraOutput::ColorAndMasks => &state.camera.color_masks,
         });
+        self.draw_scene(&mut pass, clip_from_world, DepthClip::Clipped)
+    }
+
+    /// Draws the scene from the capture's camera into its targets (the
+    /// camera uniforms already hold that camera).
+    pub(crate) fn encode_capture_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &LookupState,
+        capture: &ViewCapture,
+    ) {
+        let targets = self.camera_targets.as_ref().expect("created by ensure_resources");
+        let deferred = state.camera.deferred_built().expect("built by ensure_deferred");
+        let attachments = capture.attachments();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("lixel view capture pass"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(depth_attachment(&targets.depth.view)),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&deferred.capture);
         pass.set_bind_group(0, &self.camera_bindings.bind_group, &[]);
-        pass.set_bind_group(1, &state.maps.bind_group, &[]);
-        self.draw_scene(&mut pass, &camera.clip_from_world(), DepthClip::Clipped)
+        self.draw_scene(&mut pass, &capture.camera.clip_from_world(), DepthClip::Clipped);
     }
 
     pub(crate) fn encode_analysis_pass(

@@ -14,9 +14,11 @@
 use std::time::{Duration, Instant};
 
 use super::cascade_loop::{CascadePolicy, CascadeState, CascadeUpdate};
-use super::{AnalysisRequest, Frame, FrameReport, ReadbackLatency, RenderError, Renderer, ShadowLookup};
+use super::{
+    AnalysisReadback, AnalysisRequest, Frame, FrameReport, ReadbackLatency, RenderError, Renderer, ShadowLookup,
+};
 use crate::cascade::Splits;
-use crate::optimize::{OptimizeOptions, Optimizer, ScheduleOptions, ShadowScheduler};
+use crate::optimize::{OptimizeOptions, OptimizeReport, Optimizer, ScheduleOptions, ShadowScheduler};
 use crate::ShadowProblem;
 use crate::{Camera, Fallback, Light, LightMatrix, LixelError, Parameterization, SceneBounds, ShadowMapSize};
 
@@ -159,6 +161,15 @@ pub enum LoopError {
     Solve(#[from] LixelError),
 }
 
+/// The buffers [`ShadowLoop`] extracts each analysis's samples into
+/// ([`AnalysisReadback::samples_all_into`]).
+#[derive(Clone, Debug, Default)]
+struct KeptSamples {
+    samples: Vec<crate::Samples>,
+    workspace: crate::optimize::SampleWorkspace,
+    bits: Vec<u32>,
+}
+
 /// The frame loop: per-light matrices, the analysis cadence, the
 /// non-blocking readback and the optimizer, one call per frame.
 ///
@@ -179,6 +190,8 @@ pub struct ShadowLoop {
     policy: LoopPolicy,
     lookup: ShadowLookup,
     scheduler: ShadowScheduler,
+    /// The last analysis's samples and their extraction buffers, reused.
+    kept: KeptSamples,
     /// The cascade state of [`LoopPolicy::Cascaded`].
     cascades: Option<CascadeState>,
     optimize_every: u32,
@@ -199,7 +212,46 @@ impl ShadowLoop {
         };
         let optimize_every = options.schedule.optimize_every;
         let scheduler = ShadowScheduler::new(light_count, options.schedule, Optimizer::new(options.optimize))?;
-        Ok(Self { policy, lookup: options.lookup, scheduler, cascades, optimize_every, frame: 0 })
+        Ok(Self {
+            policy,
+            lookup: options.lookup,
+            scheduler,
+            kept: KeptSamples::default(),
+            cascades,
+            optimize_every,
+            frame: 0,
+        })
+    }
+
+    /// Every light's samples from `readback`, extracted into the loop's kept
+    /// buffers, optimized by the scheduler. Where some light's samples
+    /// cannot be extracted, light by light instead (each light keeps its own
+    /// error). With `boundary`, also each light's boundary samples (world).
+    fn optimize_readback(
+        &mut self,
+        readback: &AnalysisReadback,
+        view: &LoopView<'_>,
+        boundary: Option<&mut Vec<Vec<glam::DVec3>>>,
+    ) -> Result<Vec<Result<OptimizeReport, LixelError>>, LixelError> {
+        let KeptSamples { samples, workspace, bits } = &mut self.kept;
+        match readback.samples_all_into(view.lights, view.bounds, view.map, samples, workspace, bits) {
+            Ok(()) => {
+                if let Some(boundary) = boundary {
+                    *boundary = samples.iter().map(|s| s.boundary_world().to_vec()).collect();
+                }
+                self.scheduler.update_all_from(samples, self.frame)
+            }
+            Err(_) => {
+                let samples = readback.samples_all(view.lights, view.bounds, view.map);
+                if let Some(boundary) = boundary {
+                    *boundary = samples
+                        .iter()
+                        .map(|s| s.as_ref().map(|s| s.boundary_world().to_vec()).unwrap_or_default())
+                        .collect();
+                }
+                self.scheduler.update_all(samples, self.frame)
+            }
+        }
     }
 
     /// The policy.
@@ -244,10 +296,7 @@ impl ShadowLoop {
         let readback = if analyses { renderer.try_take_analysis() } else { None };
         if let Some(r) = &readback {
             // The samples belong to the camera the pass was rendered with.
-            let samples = r.samples_all(view.lights, view.bounds, view.map);
-            boundary_samples =
-                samples.iter().map(|s| s.as_ref().map(|s| s.boundary_world().to_vec()).unwrap_or_default()).collect();
-            for (i, report) in self.scheduler.update_all(samples, self.frame)?.into_iter().enumerate() {
+            for (i, report) in self.optimize_readback(r, view, Some(&mut boundary_samples))?.into_iter().enumerate() {
                 match report {
                     Ok(report) => {
                         optimized |= 1 << i;
@@ -420,8 +469,7 @@ impl ShadowLoop {
             };
             let mut fallbacks = Vec::with_capacity(view.lights.len());
             let mut moved = false;
-            let samples = readback.samples_all(view.lights, view.bounds, view.map);
-            for report in self.scheduler.update_all(samples, self.frame)? {
+            for report in self.optimize_readback(&readback, view, None)? {
                 let report = report?;
                 moved |= report.accepted && report.fallback.is_none();
                 fallbacks.push(report.fallback);

@@ -46,18 +46,29 @@ pub enum ShadowLookup {
     /// an occlusion word over the pattern's sub-samples
     /// ([`Renderer::read_occlusion`](super::Renderer::read_occlusion)).
     SubPixelAa(AaSamples),
+    /// Brute-force supersampling of the standard lookup, the baseline the
+    /// antialiased lookup is measured against (see
+    /// [`subpixel::supersample`](super::subpixel::supersample)): the depth
+    /// compare's maps and bit, plus one more camera pass per sub-sample of
+    /// the pattern, jittered to that sub-sample's position, whose shadow
+    /// and facing bits are gathered into per-pixel words
+    /// ([`Renderer::read_supersampled`](super::Renderer::read_supersampled)).
+    Supersampled(AaSamples),
 }
 
 impl ShadowLookup {
     /// Every lookup mode (SPSM and SGSM with their default options, the
-    /// antialiased lookup with each sample count).
-    pub const ALL: [ShadowLookup; 6] = [
+    /// antialiased lookup and supersampling with each sample count).
+    pub const ALL: [ShadowLookup; 9] = [
         ShadowLookup::DepthCompare,
         ShadowLookup::Spsm(SpsmOptions::PAPER),
         ShadowLookup::Sgsm(SgsmOptions::PAPER),
         ShadowLookup::SubPixelAa(AaSamples::X8),
         ShadowLookup::SubPixelAa(AaSamples::X16),
         ShadowLookup::SubPixelAa(AaSamples::X32),
+        ShadowLookup::Supersampled(AaSamples::X8),
+        ShadowLookup::Supersampled(AaSamples::X16),
+        ShadowLookup::Supersampled(AaSamples::X32),
     ];
 
     /// A short stable name (for file names, CSV and logs).
@@ -70,6 +81,9 @@ impl ShadowLookup {
             Self::SubPixelAa(AaSamples::X8) => "aa8",
             Self::SubPixelAa(AaSamples::X16) => "aa16",
             Self::SubPixelAa(AaSamples::X32) => "aa32",
+            Self::Supersampled(AaSamples::X8) => "ss8",
+            Self::Supersampled(AaSamples::X16) => "ss16",
+            Self::Supersampled(AaSamples::X32) => "ss32",
         }
     }
 
@@ -83,9 +97,10 @@ impl ShadowLookup {
     /// The three parts a mode provides.
     fn spec(self) -> LookupSpec {
         match self {
-            // The antialiased mode's bit is the depth compare's; its
-            // sub-pixel work runs after the camera pass (subpixel::gpu).
-            Self::DepthCompare | Self::SubPixelAa(_) => LookupSpec {
+            // The antialiased and supersampled modes' bit is the depth
+            // compare's; their sub-pixel work runs after the camera pass
+            // (subpixel::gpu, subpixel::supersample).
+            Self::DepthCompare | Self::SubPixelAa(_) | Self::Supersampled(_) => LookupSpec {
                 map_color: None,
                 shadow_wgsl: Cow::Borrowed(include_str!("../../shaders/shadow.wgsl")),
                 lookup_wgsl: Cow::Borrowed(include_str!("../../shaders/lookup_depth_compare.wgsl")),
@@ -240,6 +255,11 @@ impl LookupState {
             pulls_vertices: spec.pulls_vertices,
             sweep,
         }
+    }
+
+    /// Builds the view-capture pipelines of this mode's camera shader.
+    pub(crate) fn ensure_deferred(&mut self, device: &wgpu::Device, layouts: &SceneLayouts) {
+        self.camera.deferred(device, layouts, &self.maps_layout);
     }
 
     /// Grows the maps to hold `layers` maps of up to `width x height`.

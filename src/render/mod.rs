@@ -35,6 +35,7 @@
 //! [`Renderer::optional_features`] lists the features worth requesting.
 
 mod analysis;
+mod capture;
 mod cascade_loop;
 mod culling;
 mod depth_copy;
@@ -302,6 +303,10 @@ pub struct Renderer {
     /// scene buffers read back) with blocker bias `aa_bias` (world units).
     aa: Option<subpixel::gpu::AaPass>,
     aa_bias: f32,
+    /// The supersampled mode's gather pass, built on its first frame.
+    ss: Option<subpixel::supersample::SupersamplePass>,
+    /// The view drawn once by [`Renderer::capture_view`].
+    capture: Option<capture::ViewCapture>,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -453,6 +458,8 @@ impl Renderer {
             cascades: Vec::new(),
             aa: None,
             aa_bias,
+            ss: None,
+            capture: None,
             options,
             errors,
             depth_copy: std::sync::OnceLock::new(),
@@ -564,6 +571,53 @@ impl Renderer {
         self.camera_targets.as_ref().map(|t| (&t.color.texture, &t.depth.view))
     }
 
+    /// Draws the scene from `camera` once into a view capture and waits for
+    /// it. Until [`release_view`](Self::release_view) or the next capture,
+    /// frames whose camera equals `camera` (bit for bit) do not draw the
+    /// scene for their camera pass: one full-screen pass shades the capture
+    /// with the frame's lights and lookup instead. For runs of many frames
+    /// from one viewpoint (the experiment: every light and method through
+    /// one camera); the shadow passes are drawn as before.
+    ///
+    /// The shadow, facing and normal words of the masks are bit-identical to
+    /// a drawn camera pass (the depth test keeps the same fragments, and
+    /// their interpolated position and normal are stored as f32); the
+    /// colour is shaded with an 8-bit albedo. Such frames report
+    /// `camera_triangles` 0. The capture costs 32 bytes per pixel.
+    ///
+    /// # Errors
+    /// [`RenderError::TargetTooLarge`] for a viewport beyond the device's
+    /// limit; device errors.
+    pub fn capture_view(&mut self, camera: &Camera) -> Result<(), RenderError> {
+        self.errors.take(&self.device, "an earlier device call")?;
+        self.capture = None;
+        let frame = Frame::new(camera, &[]);
+        let slots = self.prepare(&frame)?;
+        self.write_uniforms(&frame, &slots);
+        let capture = capture::ViewCapture::new(&self.device, &self.layouts.capture, *camera);
+        let state = &mut self.lookups[slots.lookup];
+        state.ensure_deferred(&self.device, &self.layouts);
+        let mut encoder =
+            self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("lixel view capture") });
+        self.encode_capture_pass(&mut encoder, &self.lookups[slots.lookup], &capture);
+        let submission = self.queue.submit([encoder.finish()]);
+        self.errors.take(&self.device, "capturing a view")?;
+        self.wait_for(&submission)?;
+        self.capture = Some(capture);
+        Ok(())
+    }
+
+    /// Drops the view capture: every frame draws its camera pass again.
+    pub fn release_view(&mut self) {
+        self.capture = None;
+    }
+
+    /// The camera of the current view capture, if any.
+    #[must_use]
+    pub fn captured_view(&self) -> Option<&Camera> {
+        self.capture.as_ref().map(|c| &c.camera)
+    }
+
     /// Renders and submits one frame. Never waits for the GPU.
     ///
     /// # Errors
@@ -582,6 +636,11 @@ impl Renderer {
         let timer = self.timer.as_mut().and_then(GpuTimer::begin_frame);
         // A full ring skips the analysis (never waits for a slot).
         let analysis_staging = frame.analysis.and_then(|_| self.ring.acquire().map(|(slot, b)| (slot, b.clone())));
+        // A frame from the captured viewpoint shades the capture.
+        let deferred = self.capture.as_ref().is_some_and(|c| c.camera == *frame.camera);
+        if deferred {
+            self.lookups[slots.lookup].ensure_deferred(&self.device, &self.layouts);
+        }
         let state = &self.lookups[slots.lookup];
         let shadow = self.encode_shadow_passes(&mut encoder, state, &slots.maps, timer.as_ref());
         // The depth analysis and the antialiased passes read the camera pass's masks.
@@ -597,8 +656,9 @@ impl Renderer {
         } else {
             CameraOutput::Color
         };
+        let capture = if deferred { self.capture.as_ref() } else { None };
         let camera_triangles =
-            self.encode_camera_pass(&mut encoder, state, frame.camera, camera_output, timer.as_ref());
+            self.encode_camera_pass(&mut encoder, state, frame.camera, camera_output, capture, timer.as_ref());
         if let (Some(samples), Some(pass), Some(targets)) = (aa, self.aa.as_mut(), self.camera_targets.as_ref()) {
             pass.encode(
                 &self.device,
@@ -612,6 +672,10 @@ impl Renderer {
                 samples,
             );
         }
+        if let ShadowLookup::Supersampled(samples) = frame.lookup {
+            self.encode_supersampled(&mut encoder, slots.lookup, frame.camera, frame.lights.len(), samples);
+        }
+        let state = &self.lookups[slots.lookup];
         if let Some((_, buffer)) = &analysis_staging {
             self.encode_analysis_pass(&mut encoder, state, frame.camera, buffer, timer.as_ref());
         }
@@ -675,6 +739,9 @@ impl Renderer {
         let lookup = self.lookup_state(frame.lookup)?;
         if matches!(frame.lookup, ShadowLookup::SubPixelAa(_)) {
             self.ensure_aa()?;
+        }
+        if matches!(frame.lookup, ShadowLookup::Supersampled(_)) {
+            self.ensure_supersample()?;
         }
         self.ensure_resources(lookup, &maps, viewport.x, viewport.y);
         Ok(MapSlots { maps, analysis_layers, lookup })

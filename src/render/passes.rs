@@ -2,6 +2,7 @@
 //! struct per pass (the shadow pass and the maps depend on the lookup mode:
 //! `lookup.rs`).
 
+use super::capture::{self, DeferredPipelines};
 use super::uniforms::{VertexRaw, MAX_LIGHTS};
 
 /// Depth format of shadow maps and camera depth buffers.
@@ -22,6 +23,8 @@ pub(crate) const MAX_SHADOW_SLOTS: usize = 2 * MAX_LIGHTS;
 pub(crate) struct SceneLayouts {
     pub(crate) camera: wgpu::BindGroupLayout,
     pub(crate) analysis: wgpu::BindGroupLayout,
+    /// A view capture's targets (group 2 of the deferred camera pass).
+    pub(crate) capture: wgpu::BindGroupLayout,
 }
 
 impl SceneLayouts {
@@ -62,6 +65,7 @@ impl SceneLayouts {
                     texture(4, wgpu::TextureSampleType::Uint),
                 ],
             }),
+            capture: capture::layout(device),
         }
     }
 }
@@ -119,10 +123,13 @@ fn scene_pipeline(
     })
 }
 
-/// The camera pass: colour only, or colour and the full-resolution masks.
+/// The camera pass: colour only, or colour and the full-resolution masks;
+/// the view-capture pipelines of the same shader on first use.
 pub(crate) struct CameraPass {
     pub(crate) color: wgpu::RenderPipeline,
     pub(crate) color_masks: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    deferred: Option<DeferredPipelines>,
 }
 
 impl CameraPass {
@@ -152,7 +159,26 @@ impl CameraPass {
                 "fs_color_masks",
                 &[color_target, masks_target],
             ),
+            module: module.clone(),
+            deferred: None,
         }
+    }
+
+    /// The view-capture and deferred pipelines, built on the first call.
+    pub(crate) fn deferred(
+        &mut self,
+        device: &wgpu::Device,
+        layouts: &SceneLayouts,
+        maps: &wgpu::BindGroupLayout,
+    ) -> &DeferredPipelines {
+        self.deferred.get_or_insert_with(|| {
+            DeferredPipelines::new(device, [&layouts.camera, maps, &layouts.capture], &self.module)
+        })
+    }
+
+    /// The deferred pipelines when built.
+    pub(crate) fn deferred_built(&self) -> Option<&DeferredPipelines> {
+        self.deferred.as_ref()
     }
 }
 

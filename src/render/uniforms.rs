@@ -29,7 +29,16 @@ pub(crate) struct CameraRaw {
 
 impl CameraRaw {
     pub(crate) fn to_raw(camera: &Camera, ambient: f32, analysis_size: (u32, u32)) -> Self {
-        let clip_from_world = camera.clip_from_world();
+        Self::with_clip(camera, camera.clip_from_world(), ambient, analysis_size)
+    }
+
+    /// [`to_raw`](Self::to_raw) with another clip matrix (a jittered one).
+    pub(crate) fn with_clip(
+        camera: &Camera,
+        clip_from_world: glam::DMat4,
+        ambient: f32,
+        analysis_size: (u32, u32),
+    ) -> Self {
         Self {
             clip_from_world: clip_from_world.as_mat4().to_cols_array_2d(),
             // Inverted in f64: an f32 inverse loses ~far/near of precision.

@@ -484,7 +484,12 @@ impl Renderer {
     }
 
     /// `count` words of `buffer` from word `first`, after the queue's work.
-    fn read_buffer_words(&self, buffer: &wgpu::Buffer, first: u64, count: u64) -> Result<Vec<u32>, RenderError> {
+    pub(super) fn read_buffer_words(
+        &self,
+        buffer: &wgpu::Buffer,
+        first: u64,
+        count: u64,
+    ) -> Result<Vec<u32>, RenderError> {
         let size = 4 * count.max(1);
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lixel aa readback"),

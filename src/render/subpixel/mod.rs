@@ -18,6 +18,7 @@ pub mod bitmask;
 pub mod facet;
 pub mod gpu;
 pub mod reference;
+pub mod supersample;
 
 use glam::DVec2;
 
