@@ -191,6 +191,11 @@ fn closeup(path: &str) -> Result<(), String> {
     }
     let (d, x, y) = best;
     println!("window {win}x{win} at ({x}, {y}): SPSM errs at {d} more pixels than SGSM");
+    if d <= 0 {
+        // Issue 16, session 4: SPSM's own-plane rule removed the false shadow
+        // SGSM used to fix here; no picture rather than an empty one.
+        return Err(format!("no window where SPSM errs more than SGSM; {path} not written"));
+    }
     let crops: Vec<image::RgbaImage> = out
         .iter()
         .map(|(img, _)| {

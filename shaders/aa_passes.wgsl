@@ -362,7 +362,11 @@ fn table_lookup(line: vec3<f32>) -> u32 {
     let angle = u32(((a % 128) + 128) % 128);
     let offset = min(u32(floor((e + RADIUS) / (2.0 * RADIUS) * OFFSETS)), 63u);
     let i = angle * 64u + offset;
-    return table[i / 4u][i % 4u];
+    // The word's component by selects rather than a dynamic vector index
+    // (which llvmpipe spills to memory).
+    let w = table[i / 4u];
+    let j = i % 4u;
+    return select(select(w.x, w.y, j == 1u), select(w.z, w.w, j == 3u), j >= 2u);
 }
 
 // A plane through points a, b (w = 1) and the homogeneous light l.
@@ -371,60 +375,82 @@ fn plane_through_light(a: vec3<f32>, b: vec3<f32>, l: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(n, -dot(n, a));
 }
 
-// Whether the origin (the pixel's point) lies on triangle v (within `tol` of its plane and of its
-// inside): the pixel's own triangle, which must not shadow its facet.
-fn holds(v: array<vec3<f32>, 3>, normal: vec3<f32>, scale: f32, tol: f32) -> bool {
-    if abs(dot(normal, v[0])) > tol * scale {
+// Whether the origin lies inside edge p -> q of a triangle with third
+// vertex r and normal `normal`, within `tol` (scaled by the edge).
+fn inside_edge(p: vec3<f32>, q: vec3<f32>, r: vec3<f32>, normal: vec3<f32>, tol: f32) -> bool {
+    let edge = cross(normal, q - p);
+    let inside = sign(dot(edge, r - p));
+    return !(-dot(edge, p) * inside < -tol * length(edge));
+}
+
+// Whether the origin (the pixel's point) lies on triangle (v0, v1, v2)
+// (within `tol` of its plane and of its inside): the pixel's own triangle,
+// which must not shadow its facet. The vertices are separate values, not a
+// private array: llvmpipe spills dynamically indexed private arrays to
+// memory, which cost this pass several times its arithmetic.
+fn holds(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, normal: vec3<f32>, scale: f32, tol: f32) -> bool {
+    if abs(dot(normal, v0)) > tol * scale {
         return false;
     }
-    for (var k = 0u; k < 3u; k++) {
-        let p = v[k];
-        let edge = cross(normal, v[(k + 1u) % 3u] - p);
-        let inside = sign(dot(edge, v[(k + 2u) % 3u] - p));
-        if -dot(edge, p) * inside < -tol * length(edge) {
-            return false;
-        }
+    return inside_edge(v0, v1, v2, normal, tol) && inside_edge(v1, v2, v0, normal, tol)
+        && inside_edge(v2, v0, v1, normal, tol);
+}
+
+// The shadow half-space of edge p -> q (third vertex r) as seen from the
+// homogeneous light l: the plane through the edge and the light, oriented
+// towards r; w = 2 (no half-space: the triangle is edge-on to the light).
+fn edge_half_space(p: vec3<f32>, q: vec3<f32>, r: vec3<f32>, l: vec4<f32>) -> vec4<f32> {
+    let h = plane_through_light(p, q, l);
+    let side = dot(h, vec4<f32>(r, 1.0));
+    if !(abs(side) > 1e-6 * length(h.xyz) * length(r - p)) {
+        return vec4<f32>(0.0);
     }
-    return true;
+    return h * sign(side);
+}
+
+// The table's mask of half-space h over the facet (columns c0, c1, c2).
+fn half_space_mask(cols: array<vec4<f32>, 3>, h: vec4<f32>) -> u32 {
+    return table_lookup(vec3<f32>(dot(cols[0], h), dot(cols[1], h), dot(cols[2], h)));
 }
 
 // The occluded samples of a facet (columns c0, c1, c2) by triangle t:
 // `facet::shadow_half_spaces` and `occluded_mask` for one triangle.
 fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32, point: vec3<f32>) -> u32 {
     // In the facet's frame, centred on the pixel's point.
-    let v = array<vec3<f32>, 3>(vertex(t, 0u) - point, vertex(t, 1u) - point, vertex(t, 2u) - point);
-    let normal = cross(v[1] - v[0], v[2] - v[0]);
+    let v0 = vertex(t, 0u) - point;
+    let v1 = vertex(t, 1u) - point;
+    let v2 = vertex(t, 2u) - point;
+    let normal = cross(v1 - v0, v2 - v0);
     let scale = length(normal);
-    if !(scale > 0.0) || holds(v, normal, scale, bias) {
+    if !(scale > 0.0) || holds(v0, v1, v2, normal, scale, bias) {
         return 0u;
     }
-    var mask = ALL_SAMPLES;
-    for (var k = 0u; k < 4u; k++) {
-        var h: vec4<f32>;
-        if k < 3u {
-            let p = v[k];
-            let q = v[(k + 1u) % 3u];
-            let r = v[(k + 2u) % 3u];
-            h = plane_through_light(p, q, l);
-            let side = dot(h, vec4<f32>(r, 1.0));
-            if !(abs(side) > 1e-6 * length(h.xyz) * length(r - p)) {
-                return 0u;
-            }
-            h *= sign(side);
-        } else {
-            let plane = vec4<f32>(normal, -dot(normal, v[0]));
-            let towards = dot(plane, l);
-            if towards == 0.0 {
-                return 0u;
-            }
-            h = plane * -sign(towards) - vec4<f32>(0.0, 0.0, 0.0, bias * scale);
-        }
-        mask &= table_lookup(vec3<f32>(dot(cols[0], h), dot(cols[1], h), dot(cols[2], h)));
-        if mask == 0u {
-            return 0u;
-        }
+    // The triangle's own plane, facing away from the light and pushed away
+    // from it by the bias, first: it rejects most blockers behind the facet.
+    let plane = vec4<f32>(normal, -dot(normal, v0));
+    let towards = dot(plane, l);
+    if towards == 0.0 {
+        return 0u;
     }
-    return mask;
+    var mask = half_space_mask(cols, plane * -sign(towards) - vec4<f32>(0.0, 0.0, 0.0, bias * scale));
+    if mask == 0u {
+        return 0u;
+    }
+    let h0 = edge_half_space(v0, v1, v2, l);
+    let h1 = edge_half_space(v1, v2, v0, l);
+    let h2 = edge_half_space(v2, v0, v1, l);
+    if all(h0 == vec4<f32>(0.0)) || all(h1 == vec4<f32>(0.0)) || all(h2 == vec4<f32>(0.0)) {
+        return 0u;
+    }
+    mask &= half_space_mask(cols, h0);
+    if mask == 0u {
+        return 0u;
+    }
+    mask &= half_space_mask(cols, h1);
+    if mask == 0u {
+        return 0u;
+    }
+    return mask & half_space_mask(cols, h2);
 }
 
 fn unpack_normal(word: u32) -> vec3<f32> {
@@ -555,8 +581,13 @@ fn tiles_unusable(t: vec4<i32>) -> u32 {
 }
 
 // The unit geometric normal of a triangle of tiles `t` holding the pixel's
-// point (the origin), turned towards `n`; `n` when none does.
+// point (the origin), turned towards `n`; `n` when none does. Of several
+// such triangles (a shared edge or vertex) the one of the lowest index: the
+// tile lists' order comes from atomics and differs from run to run, and the
+// first match would make the result differ with it.
 fn face_normal(t: vec4<i32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f32> {
+    var best = 0xffffffffu;
+    var normal = n;
     for (var ty = t.y; ty <= t.w; ty++) {
         for (var tx = t.x; tx <= t.z; tx++) {
             let tile = u32(ty) * params.tiles_x + u32(tx);
@@ -564,16 +595,22 @@ fn face_normal(t: vec4<i32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f
             let count = atomicLoad(&tile_words[count_slot(tile)]);
             for (var k = 0u; k < count; k++) {
                 let tri = tile_list[start + k];
-                let v = array<vec3<f32>, 3>(vertex(tri, 0u) - point, vertex(tri, 1u) - point, vertex(tri, 2u) - point);
-                let g = cross(v[1] - v[0], v[2] - v[0]);
+                if tri >= best {
+                    continue;
+                }
+                let v0 = vertex(tri, 0u) - point;
+                let v1 = vertex(tri, 1u) - point;
+                let v2 = vertex(tri, 2u) - point;
+                let g = cross(v1 - v0, v2 - v0);
                 let scale = length(g);
-                if scale > 0.0 && holds(v, g, scale, tol) {
-                    return g / scale * select(-1.0, 1.0, dot(g, n) >= 0.0);
+                if scale > 0.0 && holds(v0, v1, v2, g, scale, tol) {
+                    best = tri;
+                    normal = g / scale * select(-1.0, 1.0, dot(g, n) >= 0.0);
                 }
             }
         }
     }
-    return n;
+    return normal;
 }
 
 @compute @workgroup_size(64)

@@ -56,9 +56,12 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let word = textureLoad(sgsm_masks, k, light.layer, 0).x;
     let status = (word >> 9u) & 3u;
     if status == SGSM_FULL {
-        sgsm_count(SGSM_PATH_FULL);
         let slot = (word >> 15u) & 15u;
-        return sgsm_plane_test(spsm_load(light, k + sgsm_slot_offset(slot)), p, zeta);
+        let full = sgsm_plane_test(spsm_load(light, k + sgsm_slot_offset(slot)), p, zeta);
+        if full || spsm_other_surface_lit(own, p, zeta) {
+            sgsm_count(SGSM_PATH_FULL);
+            return full;
+        }
     }
     if status == SGSM_PATTERN {
         // Every triangle reaching into the texel is on a corner plane: the
@@ -81,7 +84,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
                 }
             }
         }
-        if found {
+        if found && (best < zeta - SPSM_BIAS || spsm_other_surface_lit(own, p, zeta)) {
             sgsm_count(SGSM_PATH_PATTERN);
             return best < zeta - SPSM_BIAS;
         }

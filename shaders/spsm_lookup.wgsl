@@ -6,10 +6,13 @@
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
 //    touches the texel); p inside the stored triangle -> its plane decides;
 // 2. the 3x3 neighbourhood: any stored triangle containing p whose plane is
-//    in front of p -> shadowed; else, when the own triangle's plane is not
-//    in front of p (by more than its change over a texel), p on that plane
-//    or on a neighbour's stored triangle -> lit (a receiver's mesh edge
-//    crossing the texel);
+//    in front of p -> shadowed; else p on the own triangle's plane (within
+//    its change over a texel) -> lit (a curved receiver's neighbouring
+//    facet; session 4); else p on a neighbour's stored triangle -> lit (a
+//    receiver's mesh edge crossing the texel), unless the own triangle is
+//    an occluder in front of p and p lies within one facet width of it
+//    (spsm_other_surface_lit: a curved caster's unstored outer facet may
+//    cover p);
 // 3. uncertain: silhouette recovery. Each neighbour's consistent minimum
 //    depth tested against zeta gives a 9-bit pattern; all blocked ->
 //    shadowed, none -> lit; else the pattern gives the silhouette's normal n
@@ -267,6 +270,54 @@ fn spsm_recover(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>) -> bool 
     return true;
 }
 
+// A small stored triangle (twice its area below this, in texels²) is taken
+// for a facet of a finely tessellated curved surface (session 4).
+const SPSM_FACET_AREA: f32 = 2.0;
+// Largest facet width assumed for an unstored outer facet, in texels.
+const SPSM_FACET_WIDTH: f32 = 1.0;
+
+// Whether p lies outside triangle t by more than the width of the facet
+// that may sit unstored next to it: for a small t (a curved mesh's facet
+// near its silhouette from the light, where the conservative pass keeps the
+// facet nearest the light and loses the thinner outer one that shades p),
+// t's height over the edge p lies beyond, at most SPSM_FACET_WIDTH; for a
+// large one zero (a flat face's edge is the silhouette). Session 4, default
+// preset configuration 3: the outer facets of a tessellated cylinder and
+// sphere were missing from every texel around p, so a floor triangle stored
+// next door made p lit (false light along whole shadow edges).
+fn spsm_beyond_facet(t: SpsmTexel, p: vec2<f32>) -> bool {
+    let area2 = spsm_cross(t.v1 - t.v0, t.v2 - t.v0);
+    let orient = sign(area2);
+    let d0 = dot(p - t.v0, spsm_edge_normal(t.v0, t.v1, orient));
+    let d1 = dot(p - t.v1, spsm_edge_normal(t.v1, t.v2, orient));
+    let d2 = dot(p - t.v2, spsm_edge_normal(t.v2, t.v0, orient));
+    var d = d0;
+    var e = length(t.v1 - t.v0);
+    if d1 > d {
+        d = d1;
+        e = length(t.v2 - t.v1);
+    }
+    if d2 > d {
+        d = d2;
+        e = length(t.v0 - t.v2);
+    }
+    let height = abs(area2) / max(e, 1e-6);
+    let width = select(0.0, min(height, SPSM_FACET_WIDTH), abs(area2) < SPSM_FACET_AREA);
+    return d > width;
+}
+
+// Whether a stored surface through p other than the own texel's triangle
+// `own` (p outside it) may make p lit: `own` is not an occluder in front of
+// p (by more than its depth change over one texel), or, except with
+// SPSM_THIN, p lies beyond the facet width of it (spsm_beyond_facet). Also
+// gates SGSM's plane paths (sgsm_lookup.wgsl).
+fn spsm_other_surface_lit(own: SpsmTexel, p: vec2<f32>, zeta: f32) -> bool {
+    let plane = spsm_plane_at(own, p);
+    let slack = SPSM_BIAS + SPSM_TOLERANCE * plane.y;
+    let near = plane.x >= zeta - slack - abs(own.gradient.x) - abs(own.gradient.y);
+    return near || (!SPSM_THIN && spsm_beyond_facet(own, p));
+}
+
 fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let m = map_position(light, world);
     if m.w == 0.0 {
@@ -291,15 +342,18 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     // by more than its own depth change across one texel (a curved
     // receiver's neighbouring facet): no occluder found so far. p then
     // counts as lit when it lies on that plane (the paper's lit
-    // classification) or on a neighbour's stored triangle (a receiver's mesh
-    // edge crosses the texel). A thin caster stored over a receiver is far
+    // classification; before session 4 only with SPSM_THIN: without it the
+    // default preset's curved surfaces were speckled with false shadow) or
+    // on a neighbour's stored triangle (a receiver's mesh edge crosses the
+    // texel; also when p lies beyond a facet width of the own triangle,
+    // spsm_other_surface_lit). A thin caster stored over a receiver is far
     // more in front and goes on to the silhouette recovery.
-    // Without SPSM_THIN (i16's rules): any neighbour's stored surface through
-    // p means lit, and no own-plane rule.
-    let own_clear = !SPSM_THIN || own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
+    let own_near = own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
+    let own_clear = spsm_other_surface_lit(own, p, zeta);
     let pattern_slack = SPSM_TOLERANCE * 0.5 * (own.gradient_error.x + own.gradient_error.y);
     var pattern = 0u;
-    var on_surface = SPSM_THIN && own_clear && own_plane.x <= zeta + own_slack;
+    let on_own_plane = own_near && own_plane.x <= zeta + own_slack;
+    var on_surface = false;
     for (var i = 0u; i < 9u; i++) {
         var t = own;
         let ki = k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1);
@@ -317,7 +371,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
             pattern |= 1u << i;
         }
     }
-    if on_surface {
+    if on_own_plane || on_surface {
         return false;
     }
     return spsm_recover(light, k, pattern, p);

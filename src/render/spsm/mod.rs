@@ -49,12 +49,14 @@ pub struct SpsmOptions {
     pub packing_tolerance: bool,
     /// Thin-caster rules (issue 16, s16): the neighbours' "p lies on a
     /// stored receiver" shortcut only when the own texel's triangle is not
-    /// an occluder in front of p, and the silhouette recovery tests both
-    /// sides of a thin blocked band (four directions for a blob). Keeps
-    /// sub-texel wires' shadows (277 of 279 pixels against 82 without, in
-    /// `tests/render_spsm.rs`) but adds false shadow along edges on the
-    /// experiment's scene (quick preset: focused+spsm 434.8 against 296.7
-    /// misclassified), hence off in [`Self::PAPER`].
+    /// an occluder in front of p (without them also when p lies beyond one
+    /// facet width of a small own triangle, session 4), and the silhouette
+    /// recovery tests both sides of a thin blocked band (four directions
+    /// for a blob). Keeps sub-texel wires' shadows (276 of 279 pixels
+    /// against 68 without, in `tests/render_spsm.rs`) but adds false shadow
+    /// along edges on the experiment's scene (session 2, quick preset:
+    /// focused+spsm 434.8 against 296.7 misclassified), hence off in
+    /// [`Self::PAPER`].
     pub thin_casters: bool,
 }
 
