@@ -7,7 +7,7 @@
 //! antialiasing of shadows is to shade N sub-samples per pixel: here the
 //! camera pass is drawn N more times, each with the projection shifted so
 //! that the pixel centres fall on one sub-sample position of
-//! [`SAMPLE_POSITIONS`](super::SAMPLE_POSITIONS) (the positions the coverage
+//! [`SAMPLE_POSITIONS`] (the positions the coverage
 //! truth traces), into targets of its own; after each pass a compute pass
 //! (`shaders/aa_supersample.wgsl`) gathers that pass's shadow and
 //! light-facing bits into per-pixel words. The shadow maps are rendered
@@ -40,7 +40,7 @@ const PARAM_STRIDE: u64 = 256;
 
 /// One light's words of the last supersampled frame, one per camera pixel
 /// (row-major, row 0 at the top); bit `s` is sub-sample `s` of
-/// [`SAMPLE_POSITIONS`](super::SAMPLE_POSITIONS) (only the pattern's bits).
+/// [`SAMPLE_POSITIONS`] (only the pattern's bits).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct SupersampledWords {
