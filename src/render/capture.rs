@@ -15,8 +15,7 @@
 //!
 //! [`Renderer::capture_view`]: super::Renderer::capture_view
 
-use super::passes::{Target, COLOR_FORMAT, DEPTH_FORMAT, MASKS_FORMAT};
-use super::uniforms::VertexRaw;
+use super::passes::{scene_pipeline, Target, COLOR_FORMAT, DEPTH_FORMAT, MASKS_FORMAT};
 use crate::Camera;
 
 /// Format of both capture targets (f32 bits in integer channels: R32Float
@@ -115,34 +114,15 @@ impl DeferredPipelines {
             immediate_size: 0,
         });
         let capture_target = Some(wgpu::ColorTargetState::from(CAPTURE_FORMAT));
-        let capture = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lixel view capture pipeline"),
-            layout: Some(&capture_layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VertexRaw::layout())],
-            },
-            // As the camera pass: no culling, depth test "less".
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some("fs_capture"),
-                compilation_options: Default::default(),
-                targets: &[capture_target.clone(), capture_target],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // As the camera pass: no culling, depth test "less".
+        let capture = scene_pipeline(
+            device,
+            "lixel view capture pipeline",
+            &capture_layout,
+            module,
+            "fs_capture",
+            &[capture_target.clone(), capture_target],
+        );
         let full_screen = |label: &str, entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),

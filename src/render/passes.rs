@@ -85,7 +85,7 @@ fn pipeline_layout(
 
 /// A pipeline drawing the scene from the camera (`vs_main` in common.wgsl)
 /// with the usual depth test.
-fn scene_pipeline(
+pub(crate) fn scene_pipeline(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::PipelineLayout,
