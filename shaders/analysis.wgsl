@@ -31,13 +31,6 @@ fn fs_analysis_geometry(in: VertexOutput) -> @location(0) vec4<u32> {
     return mask_words(in, shade(in));
 }
 
-// One triangle covering the target: (-1, -1), (3, -1), (-1, 3).
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
-    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
-}
-
 // Camera depth at full-resolution pixel `p`; 1.0 (background) outside.
 fn camera_depth_at(p: vec2<i32>, size: vec2<i32>) -> f32 {
     if any(p < vec2<i32>(0)) || any(p >= size) {

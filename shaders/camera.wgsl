@@ -54,13 +54,6 @@ fn fs_capture(in: VertexOutput) -> Capture {
     return out;
 }
 
-// One triangle covering the target: (-1, -1), (3, -1), (-1, 3).
-@vertex
-fn vs_deferred(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
-    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
-    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
-}
-
 // The captured fragment at `position`; background pixels (depth 1, never
 // written) are discarded, keeping the pass's clear values as a drawn pass does.
 fn captured_fragment(position: vec4<f32>) -> VertexOutput {

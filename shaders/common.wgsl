@@ -85,6 +85,14 @@ fn vs_main(vertex: VertexInput) -> VertexOutput {
     return out;
 }
 
+// The full-screen passes' vertex stage (the depth analysis, the deferred
+// camera pass): one triangle covering the target: (-1, -1), (3, -1), (-1, 3).
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
 // Unnormalised direction from `world` towards the light.
 fn to_light(light: Light, world: vec3<f32>) -> vec3<f32> {
     return light.position.xyz - world * light.position.w;

@@ -129,7 +129,7 @@ impl DeferredPipelines {
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
                     module,
-                    entry_point: Some("vs_deferred"),
+                    entry_point: Some("vs_fullscreen"),
                     compilation_options: Default::default(),
                     buffers: &[],
                 },
