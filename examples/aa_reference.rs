@@ -21,7 +21,7 @@ mod support;
 
 use std::time::Instant;
 
-use lixel::experiment::{self, Coverage, ExperimentConfig, Preset, Runner, VisibilityError};
+use lixel::experiment::{self, Coverage, ExperimentConfig, Runner, VisibilityError};
 use lixel::mesh::RayCaster;
 use lixel::render::subpixel::AaSamples;
 use lixel::Parameterization;
@@ -35,12 +35,7 @@ fn main() {
 
 fn run() -> Result<(), String> {
     let args = support::Args::from_env();
-    let preset = match args.value("--preset").unwrap_or("quick") {
-        "quick" => Preset::Quick,
-        "default" => Preset::Default,
-        "paper" => Preset::Paper,
-        other => return Err(format!("--preset: unknown preset {other:?} (quick, default, paper)")),
-    };
+    let preset = support::preset(&args)?;
     let base = ExperimentConfig::preset(preset);
     let config = ExperimentConfig {
         configs: args.parse("--configs", base.configs)?,

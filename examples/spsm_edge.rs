@@ -52,12 +52,7 @@ fn main() {
 
 fn run() -> Result<(), String> {
     let args = support::Args::from_env();
-    let preset = match args.value("--preset").unwrap_or("quick") {
-        "quick" => Preset::Quick,
-        "default" => Preset::Default,
-        "paper" => Preset::Paper,
-        other => return Err(format!("unknown preset {other:?}")),
-    };
+    let preset = support::preset(&args)?;
     let index: usize = args.parse("--config", 1)?;
     if let Some(path) = args.value("--trio") {
         let name = args.value("--method").unwrap_or("focused");

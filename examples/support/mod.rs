@@ -335,3 +335,11 @@ pub fn run_loop(
     }
     Ok(records)
 }
+
+/// `--preset NAME` (default `quick`) as the experiment's preset, by the
+/// CLI's own names.
+#[cfg(feature = "cli")]
+pub fn preset(args: &Args) -> Result<lixel::experiment::Preset, String> {
+    let name = args.value("--preset").unwrap_or("quick");
+    <lixel::experiment::Preset as clap::ValueEnum>::from_str(name, false).map_err(|e| format!("--preset: {e}"))
+}
