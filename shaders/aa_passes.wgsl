@@ -18,6 +18,12 @@
 //    no silhouette texel in it -> the standard bit in every sample; else
 //    every triangle of its tiles clips the facet's samples through four
 //    half-plane table lookups, ANDed per triangle, ORed over triangles.
+//    Each list entry is first culled against the pixel's footprint with the
+//    triangle's own box (written by `tile_count_pass` after the lists, grown
+//    by the lists' texel) and tested in one tile only (the tile of the
+//    box-footprint overlap's low corner): the same rule the lists apply per
+//    tile, applied per pixel, so a triangle is tested at most once and only
+//    when its box meets the footprint.
 
 const TILE: u32 = 8u;
 // Footprints touching more tiles than this take the standard bit (counted).
@@ -55,8 +61,11 @@ struct AaParams {
     sat_base: u32,
     // Tiles per section of `tile_words` (count, cursor, offset).
     tile_stride: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Index of the triangles' boxes in `tile_list` (after the lists).
+    box_base: u32,
+    // 1: per-pixel box culling on (the default); 0: every entry of the
+    // footprint's tiles is tested (the old rule, for tests).
+    cull: u32,
 }
 
 // a.w: 1 when the edge is a silhouette for every light (boundary or
@@ -258,10 +267,10 @@ fn vertex(t: u32, k: u32) -> vec3<f32> {
     return vec3<f32>(vertex_words[i], vertex_words[i + 1u], vertex_words[i + 2u]);
 }
 
-// The tiles a triangle's projected bounding box (grown by a texel) touches:
-// xy the first, zw the last; empty (z < x) when it misses the map or lies
-// behind the light. A triangle crossing w = 0 takes the whole map.
-fn triangle_tiles(t: u32) -> vec4<i32> {
+// A triangle's projected bounding box in texels (xy low, zw high); the
+// whole map when it crosses w = 0; empty (z < x) when it lies behind the
+// light.
+fn triangle_box(t: u32) -> vec4<f32> {
     let light = lights.items[params.light];
     var lo = vec2<f32>(1e30);
     var hi = vec2<f32>(-1e30);
@@ -276,22 +285,43 @@ fn triangle_tiles(t: u32) -> vec4<i32> {
             hi = max(hi, p);
         }
     }
-    let empty = vec4<i32>(0, 0, -1, -1);
     if behind == 3u {
-        return empty;
+        return vec4<f32>(0.0, 0.0, -1.0, -1.0);
     }
-    let size = map_size();
     if behind > 0u {
-        lo = vec2<f32>(0.0);
-        hi = size;
+        return vec4<f32>(vec2<f32>(0.0), map_size());
     }
-    if any(hi < vec2<f32>(-1.0)) || any(lo > size + vec2<f32>(1.0)) {
+    return vec4<f32>(lo, hi);
+}
+
+// Texel index range of a point range, clamped into the map first (in f32:
+// a far box corner must not overflow the conversion).
+fn texel_of(p: vec2<f32>) -> vec2<i32> {
+    let last = vec2<f32>(f32(params.map_w) - 1.0, f32(params.map_h) - 1.0);
+    return vec2<i32>(clamp(floor(p), vec2<f32>(0.0), last));
+}
+
+// The tiles a triangle's box (grown by a texel) touches: xy the first, zw
+// the last; empty (z < x) when it misses the map or lies behind the light.
+fn triangle_tiles(b: vec4<f32>) -> vec4<i32> {
+    let empty = vec4<i32>(0, 0, -1, -1);
+    let size = map_size();
+    if b.z < b.x || any(b.zw < vec2<f32>(-1.0)) || any(b.xy > size + vec2<f32>(1.0)) {
         return empty;
     }
-    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
-    let a = clamp(vec2<i32>(floor(lo)) - vec2<i32>(1), vec2<i32>(0), last);
-    let b = clamp(vec2<i32>(floor(hi)) + vec2<i32>(1), vec2<i32>(0), last);
-    return vec4<i32>(a / i32(TILE), b / i32(TILE));
+    let a = texel_of(b.xy - vec2<f32>(1.0));
+    let c = texel_of(b.zw + vec2<f32>(1.0));
+    return vec4<i32>(a / i32(TILE), c / i32(TILE));
+}
+
+fn stored_box(t: u32) -> vec4<f32> {
+    let i = params.box_base + 4u * t;
+    return vec4<f32>(
+        bitcast<f32>(tile_list[i]),
+        bitcast<f32>(tile_list[i + 1u]),
+        bitcast<f32>(tile_list[i + 2u]),
+        bitcast<f32>(tile_list[i + 3u]),
+    );
 }
 
 @compute @workgroup_size(64)
@@ -300,7 +330,13 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     if t >= params.triangle_count {
         return;
     }
-    let r = triangle_tiles(t);
+    let b = triangle_box(t);
+    let i = params.box_base + 4u * t;
+    tile_list[i] = bitcast<u32>(b.x);
+    tile_list[i + 1u] = bitcast<u32>(b.y);
+    tile_list[i + 2u] = bitcast<u32>(b.z);
+    tile_list[i + 3u] = bitcast<u32>(b.w);
+    let r = triangle_tiles(b);
     for (var ty = r.y; ty <= r.w; ty++) {
         for (var tx = r.x; tx <= r.z; tx++) {
             if tile_active(vec2<i32>(tx, ty)) {
@@ -327,7 +363,7 @@ fn tile_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if t >= params.triangle_count {
         return;
     }
-    let r = triangle_tiles(t);
+    let r = triangle_tiles(stored_box(t));
     for (var ty = r.y; ty <= r.w; ty++) {
         for (var tx = r.x; tx <= r.z; tx++) {
             if tile_active(vec2<i32>(tx, ty)) {
@@ -580,12 +616,39 @@ fn tiles_unusable(t: vec4<i32>) -> u32 {
     return 0u;
 }
 
-// The unit geometric normal of a triangle of tiles `t` holding the pixel's
-// point (the origin), turned towards `n`; `n` when none does. Of several
-// such triangles (a shared edge or vertex) the one of the lowest index: the
-// tile lists' order comes from atomics and differs from run to run, and the
-// first match would make the result differ with it.
-fn face_normal(t: vec4<i32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f32> {
+// Whether list entry `tri` of tile `tile` is tested for a footprint
+// [lo, hi] (texels): the triangle's box grown by the lists' texel meets it,
+// and `tile` is the tile of the overlap's low corner. That tile is one of
+// the footprint's tiles and lists the triangle (its box's tiles hold the
+// corner too), so every triangle whose box meets the footprint is tested
+// exactly once. Always true with culling off (`params.cull` 0).
+fn entry_meets(tri: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) -> bool {
+    if params.cull == 0u {
+        return true;
+    }
+    let b = stored_box(tri);
+    let blo = b.xy - vec2<f32>(1.0);
+    let bhi = b.zw + vec2<f32>(1.0);
+    if any(blo > hi) || any(bhi < lo) {
+        return false;
+    }
+    return all(texel_of(max(blo, lo)) / i32(TILE) == tile);
+}
+
+// The unit geometric normal of a triangle holding the pixel's point (the
+// origin; `p` its texel position inside footprint tiles `t`), turned
+// towards `n`; `n` when none does. With culling on only triangles whose box
+// (grown by a texel) holds `p`, in `p`'s tile, are tried: a triangle within
+// `tol` of the point projects within a texel of it unless `tol` exceeds a
+// texel. Of several such triangles (a shared edge or vertex) the one of the
+// lowest index: the tile lists' order comes from atomics and differs from
+// run to run, and the first match would make the result differ with it.
+fn face_normal(t_in: vec4<i32>, p: vec2<f32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f32> {
+    var t = t_in;
+    if params.cull != 0u {
+        let own = texel_of(p) / i32(TILE);
+        t = vec4<i32>(own, own);
+    }
     var best = 0xffffffffu;
     var normal = n;
     for (var ty = t.y; ty <= t.w; ty++) {
@@ -595,7 +658,7 @@ fn face_normal(t: vec4<i32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f
             let count = atomicLoad(&tile_words[count_slot(tile)]);
             for (var k = 0u; k < count; k++) {
                 let tri = tile_list[start + k];
-                if tri >= best {
+                if tri >= best || !entry_meets(tri, vec2<i32>(tx, ty), p, p) {
                     continue;
                 }
                 let v0 = vertex(tri, 0u) - point;
@@ -666,7 +729,9 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     // Then Pan et al.'s facet: the plane of the triangle holding the
     // pixel's point (found among its tiles' triangles), when its footprint
     // is served by tiles as well.
-    let face = face_normal(t, point, n, params.bias + 0.01 * fp.diameter);
+    let centre = light.clip_from_world * vec4<f32>(point, 1.0);
+    let p = clamp(to_texel(centre), fp.lo, fp.hi);
+    let face = face_normal(t, p, point, n, params.bias + 0.01 * fp.diameter);
     if any(face != n) {
         let f = facet_cols(face, eye, rays[0], rays[1], rays[2]);
         if f.ok {
@@ -691,9 +756,13 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             let tile = u32(ty) * params.tiles_x + u32(tx);
             let start = atomicLoad(&tile_words[offset_slot(tile)]);
             let count = atomicLoad(&tile_words[count_slot(tile)]);
-            tests += count;
             for (var k = 0u; k < count; k++) {
-                occluded |= triangle_mask(tile_list[start + k], facet.cols, l, bias, point);
+                let tri = tile_list[start + k];
+                if !entry_meets(tri, vec2<i32>(tx, ty), fp.lo, fp.hi) {
+                    continue;
+                }
+                tests += 1u;
+                occluded |= triangle_mask(tri, facet.cols, l, bias, point);
                 if (occluded & params.sample_mask) == params.sample_mask {
                     break;
                 }

@@ -56,7 +56,9 @@ pub struct AaStats {
     pub overflow_pixels: u32,
     /// Pixels that kept the standard bit because the footprint was too wide.
     pub wide_pixels: u32,
-    /// Triangle–facet tests of the exact path, all pixels together.
+    /// Triangle–facet tests of the exact path, all pixels together (list
+    /// entries whose box meets the pixel's footprint; every entry of its
+    /// tiles with culling off).
     pub triangle_tests: u32,
 }
 
@@ -77,7 +79,8 @@ struct ParamsRaw {
     map_h: u32,
     sat_base: u32,
     tile_stride: u32,
-    _pad: [u32; 2],
+    box_base: u32,
+    cull: u32,
 }
 
 /// One mesh edge for the silhouette pass (`Edge` in the shader).
@@ -121,6 +124,7 @@ struct Sized {
     tiles: u64,
     pixels: u64,
     lights: u64,
+    triangles: u64,
     map_words: wgpu::Buffer,
     tile_words: wgpu::Buffer,
     tile_list: wgpu::Buffer,
@@ -150,6 +154,9 @@ pub(crate) struct AaPass {
     last: Option<LastFrame>,
     /// List entries per light actually used (at most [`PAIR_CAPACITY`]).
     capacity: u32,
+    /// Per-pixel culling of list entries by the triangles' boxes (on unless
+    /// a test turns it off to compare).
+    cull: bool,
 }
 
 const ENTRY_POINTS: [&str; 7] =
@@ -274,6 +281,7 @@ impl AaPass {
             bias,
             last: None,
             capacity: PAIR_CAPACITY,
+            cull: true,
         }
     }
 
@@ -281,12 +289,14 @@ impl AaPass {
         wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() }
     }
 
-    fn ensure(&mut self, device: &wgpu::Device, map_texels: u64, tiles: u64, pixels: u64, lights: u64) {
-        if self
-            .sized
-            .as_ref()
-            .is_some_and(|s| s.map_texels >= map_texels && s.tiles >= tiles && s.pixels >= pixels && s.lights >= lights)
-        {
+    fn ensure(&mut self, device: &wgpu::Device, map_texels: u64, tiles: u64, pixels: u64, lights: u64, triangles: u64) {
+        if self.sized.as_ref().is_some_and(|s| {
+            s.map_texels >= map_texels
+                && s.tiles >= tiles
+                && s.pixels >= pixels
+                && s.lights >= lights
+                && s.triangles >= triangles
+        }) {
             return;
         }
         let old = self.sized.as_ref();
@@ -294,6 +304,7 @@ impl AaPass {
         let tiles = tiles.max(old.map_or(0, |s| s.tiles));
         let pixels = pixels.max(old.map_or(0, |s| s.pixels));
         let lights = lights.max(old.map_or(0, |s| s.lights));
+        let triangles = triangles.max(old.map_or(0, |s| s.triangles));
         let buffer = |label: &str, words: u64, copy_src: bool| {
             let mut usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
             if copy_src {
@@ -311,9 +322,15 @@ impl AaPass {
             tiles,
             pixels,
             lights,
+            triangles,
             map_words: buffer("lixel aa mask and summed-area table", 2 * map_texels, true),
             tile_words: buffer("lixel aa statistics and tiles", STATS_WORDS + 3 * tiles, true),
-            tile_list: buffer("lixel aa triangle-tile lists", u64::from(PAIR_CAPACITY), false),
+            // The lists, then each triangle's box in the map (4 f32).
+            tile_list: buffer(
+                "lixel aa triangle-tile lists and boxes",
+                u64::from(PAIR_CAPACITY) + 4 * triangles,
+                false,
+            ),
             occlusion: buffer("lixel aa occlusion words", pixels * lights, true),
         });
     }
@@ -339,9 +356,16 @@ impl AaPass {
             .map(|m| u64::from(m.map_size.width.div_ceil(TILE)) * u64::from(m.map_size.height.div_ceil(TILE)))
             .max();
         let pixels = u64::from(width) * u64::from(height);
-        self.ensure(device, map_texels.unwrap_or(1), tiles.unwrap_or(1), pixels, lights.len().max(1) as u64);
-        let sized = self.sized.as_ref().expect("ensured above");
         let (vertices, indices, triangles) = scene;
+        self.ensure(
+            device,
+            map_texels.unwrap_or(1),
+            tiles.unwrap_or(1),
+            pixels,
+            lights.len().max(1) as u64,
+            u64::from(triangles),
+        );
+        let sized = self.sized.as_ref().expect("ensured above");
         let group0 = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lixel aa group 0"),
             layout: &self.group0,
@@ -392,7 +416,8 @@ impl AaPass {
                 map_h: mh,
                 sat_base: sized.map_texels as u32,
                 tile_stride: sized.tiles as u32,
-                _pad: [0; 2],
+                box_base: PAIR_CAPACITY,
+                cull: u32::from(self.cull),
             };
             queue.write_buffer(&self.params, i as u64 * PARAM_STRIDE, bytemuck::bytes_of(&raw));
             encoder.clear_buffer(&sized.map_words, 0, Some(4 * u64::from(mw) * u64::from(mh)));
@@ -526,6 +551,21 @@ impl Renderer {
         self.ensure_aa()?;
         if let Some(aa) = self.aa.as_mut() {
             aa.capacity = entries.clamp(1, PAIR_CAPACITY);
+        }
+        Ok(())
+    }
+
+    /// Turns the per-pixel culling of list entries by the triangles' boxes
+    /// off (`false`: every entry of a footprint's tiles is tested, as before
+    /// the culling) or on (the default), from the next frame on: a way to
+    /// compare both.
+    ///
+    /// # Errors
+    /// Device errors building the passes.
+    pub fn set_aa_footprint_culling(&mut self, on: bool) -> Result<(), RenderError> {
+        self.ensure_aa()?;
+        if let Some(aa) = self.aa.as_mut() {
+            aa.cull = on;
         }
         Ok(())
     }
