@@ -16,7 +16,8 @@
 // 4. `visibility`: one invocation per pixel: the pixel's facet (tangent plane
 //    from the camera pass's depth and normal), its light-space footprint;
 //    no silhouette texel in it -> the standard bit in every sample; else
-//    every triangle of its tiles clips the facet's samples through four
+//    the pixel is queued, and `visibility_exact` (one invocation per queued
+//    pixel) finds the facet on its triangle's plane, and every triangle of its tiles clips the facet's samples through four
 //    half-plane table lookups, ANDed per triangle, ORed over triangles.
 //    Each list entry is first culled against the pixel's footprint with the
 //    triangle's own box (written by `tile_count_pass` after the lists, grown
@@ -42,6 +43,8 @@ const STAT_EXACT: u32 = 1u;
 const STAT_OVERFLOW: u32 = 2u;
 const STAT_WIDE: u32 = 3u;
 const STAT_TESTS: u32 = 4u;
+// Pixels queued for the exact path (`visibility` -> `visibility_exact`).
+const STAT_QUEUE: u32 = 5u;
 const STATS_PER_LIGHT: u32 = 8u;
 
 struct AaParams {
@@ -63,9 +66,14 @@ struct AaParams {
     tile_stride: u32,
     // Index of the triangles' boxes in `tile_list` (after the lists).
     box_base: u32,
+    // Index of the exact path's pixel queue in `tile_list` (after the boxes).
+    queue_base: u32,
     // 1: per-pixel box culling on (the default); 0: every entry of the
     // footprint's tiles is tested (the old rule, for tests).
     cull: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // a.w: 1 when the edge is a silhouette for every light (boundary or
@@ -676,6 +684,60 @@ fn face_normal(t_in: vec4<i32>, p: vec2<f32>, point: vec3<f32>, n: vec3<f32>, to
     return normal;
 }
 
+// What a pixel's classification found: the facet on the masks' normal, its
+// footprint and tiles; `exact` when a silhouette texel lies in the
+// footprint (else the pixel keeps the standard bit).
+struct Pixel {
+    exact: bool,
+    point: vec3<f32>,
+    eye: vec3<f32>,
+    rays: array<vec3<f32>, 3>,
+    n: vec3<f32>,
+    facet: FacetCols,
+    fp: Footprint,
+    t: vec4<i32>,
+}
+
+fn pixel_facet(id: u32, words: vec4<u32>, light: Light) -> Pixel {
+    var out: Pixel;
+    out.exact = false;
+    let px = id % params.width;
+    let py = id / params.width;
+    let depth = bitcast<f32>(words.x);
+    let size = vec2<f32>(f32(params.width), f32(params.height));
+    let centre_ndc = vec2<f32>((f32(px) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + 0.5) / size.y * 2.0);
+    let hp = camera.world_from_clip * vec4<f32>(centre_ndc, depth, 1.0);
+    out.point = hp.xyz / hp.w;
+    let near = pixel_near(px, py, vec2<f32>(0.0), size);
+    out.rays = array<vec3<f32>, 3>(
+        pixel_near(px, py, vec2<f32>(1.0, 0.0), size) - near,
+        pixel_near(px, py, vec2<f32>(0.0, 1.0), size) - near,
+        near - camera.eye.xyz,
+    );
+    out.eye = camera.eye.xyz - out.point;
+    // First the facet on the masks' (interpolated) normal: it decides
+    // whether the pixel takes the exact path.
+    out.n = unpack_normal(words.w);
+    out.facet = facet_cols(out.n, out.eye, out.rays[0], out.rays[1], out.rays[2]);
+    if !out.facet.ok {
+        return out;
+    }
+    out.fp = facet_footprint(out.facet.cols, out.eye, out.rays, out.point, light);
+    if !out.fp.ok {
+        return out;
+    }
+    out.t = footprint_tiles(out.fp);
+    out.exact = out.t.x <= out.t.z && rect_sum(vec2<i32>(floor(out.fp.lo)), vec2<i32>(floor(out.fp.hi))) > 0u;
+    return out;
+}
+
+// Classification, one invocation per pixel: every pixel gets its standard
+// bit in every sample; a pixel whose footprint holds a silhouette texel and
+// whose tiles can serve it is queued (its index appended to the queue in
+// `tile_list`, counted in STAT_QUEUE) for `visibility_exact`, which then
+// runs over the queued pixels only: they are a few percent of the screen
+// and lie in runs along shadow edges, so the expensive path no longer runs
+// in SIMD lanes beside pixels that left early.
 @compute @workgroup_size(64)
 fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = flat_id(gid, groups);
@@ -683,49 +745,45 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if id >= pixels {
         return;
     }
-    let out = params.light * pixels + id;
-    let px = id % params.width;
-    let py = id / params.width;
-    let words = textureLoad(camera_masks, vec2<u32>(px, py), 0);
+    let words = textureLoad(camera_masks, vec2<u32>(id % params.width, id / params.width), 0);
     let bit = 1u << params.light;
     let standard = select(0u, ALL_SAMPLES, (words.y & bit) != 0u) & params.sample_mask;
-    occlusion[out] = standard;
-    let depth = bitcast<f32>(words.x);
-    if (words.z & bit) == 0u || depth >= 1.0 {
+    occlusion[params.light * pixels + id] = standard;
+    if (words.z & bit) == 0u || bitcast<f32>(words.x) >= 1.0 {
         return;
     }
-    let light = lights.items[params.light];
-    let size = vec2<f32>(f32(params.width), f32(params.height));
-    let centre_ndc = vec2<f32>((f32(px) + 0.5) / size.x * 2.0 - 1.0, 1.0 - (f32(py) + 0.5) / size.y * 2.0);
-    let hp = camera.world_from_clip * vec4<f32>(centre_ndc, depth, 1.0);
-    let point = hp.xyz / hp.w;
-    let near = pixel_near(px, py, vec2<f32>(0.0), size);
-    let rays = array<vec3<f32>, 3>(
-        pixel_near(px, py, vec2<f32>(1.0, 0.0), size) - near,
-        pixel_near(px, py, vec2<f32>(0.0, 1.0), size) - near,
-        near - camera.eye.xyz,
-    );
-    let eye = camera.eye.xyz - point;
-    // First the facet on the masks' (interpolated) normal: it decides
-    // whether the pixel takes the exact path.
-    let n = unpack_normal(words.w);
-    var facet = facet_cols(n, eye, rays[0], rays[1], rays[2]);
-    if !facet.ok {
+    let pixel = pixel_facet(id, words, lights.items[params.light]);
+    if !pixel.exact {
         return;
     }
-    var fp = facet_footprint(facet.cols, eye, rays, point, light);
-    if !fp.ok {
-        return;
-    }
-    var t = footprint_tiles(fp);
-    if t.x > t.z || rect_sum(vec2<i32>(floor(fp.lo)), vec2<i32>(floor(fp.hi))) == 0u {
-        return;
-    }
-    let why = tiles_unusable(t);
+    let why = tiles_unusable(pixel.t);
     if why != 0u {
         add_stat(why, 1u);
         return;
     }
+    let slot = atomicAdd(&tile_words[params.light * STATS_PER_LIGHT + STAT_QUEUE], 1u);
+    tile_list[params.queue_base + slot] = id;
+}
+
+// The exact path, one invocation per queued pixel (the dispatch covers
+// every pixel; invocations past the queue's length return at once).
+@compute @workgroup_size(64)
+fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = flat_id(gid, groups);
+    if slot >= atomicLoad(&tile_words[params.light * STATS_PER_LIGHT + STAT_QUEUE]) {
+        return;
+    }
+    let id = tile_list[params.queue_base + slot];
+    let words = textureLoad(camera_masks, vec2<u32>(id % params.width, id / params.width), 0);
+    let light = lights.items[params.light];
+    let pixel = pixel_facet(id, words, light);
+    let point = pixel.point;
+    let eye = pixel.eye;
+    let rays = pixel.rays;
+    let n = pixel.n;
+    var facet = pixel.facet;
+    var fp = pixel.fp;
+    var t = pixel.t;
     // Then Pan et al.'s facet: the plane of the triangle holding the
     // pixel's point (found among its tiles' triangles), when its footprint
     // is served by tiles as well.
@@ -744,9 +802,10 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             }
         }
     }
-    // Triangles holding the pixel's own point (its triangle) are skipped; the others' planes are pushed away from the
-    // light by the scene bias plus a hundredth of the facet's size (the
-    // depth buffer's error in the reconstructed point).
+    // Triangles holding the pixel's own point (its triangle) are skipped;
+    // the others' planes are pushed away from the light by the scene bias
+    // plus a hundredth of the facet's size (the depth buffer's error in the
+    // reconstructed point).
     let bias = params.bias + 0.01 * fp.diameter;
     let l = vec4<f32>(light.position.xyz - point * light.position.w, light.position.w);
     var occluded = 0u;
@@ -771,5 +830,5 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     }
     add_stat(STAT_EXACT, 1u);
     add_stat(STAT_TESTS, tests);
-    occlusion[out] = occluded & params.sample_mask;
+    occlusion[params.light * params.width * params.height + id] = occluded & params.sample_mask;
 }

@@ -80,7 +80,9 @@ struct ParamsRaw {
     sat_base: u32,
     tile_stride: u32,
     box_base: u32,
+    queue_base: u32,
     cull: u32,
+    _pad: [u32; 3],
 }
 
 /// One mesh edge for the silhouette pass (`Edge` in the shader).
@@ -143,7 +145,8 @@ struct LastFrame {
 pub(crate) struct AaPass {
     group0: wgpu::BindGroupLayout,
     group1: wgpu::BindGroupLayout,
-    /// silhouette, sat_rows, sat_cols, tile_count_pass, tile_scan, tile_write, visibility.
+    /// silhouette, sat_rows, sat_cols, tile_count_pass, tile_scan, tile_write, visibility,
+    /// visibility_exact.
     pipelines: Vec<wgpu::ComputePipeline>,
     edges: wgpu::Buffer,
     edge_count: u32,
@@ -159,8 +162,16 @@ pub(crate) struct AaPass {
     cull: bool,
 }
 
-const ENTRY_POINTS: [&str; 7] =
-    ["silhouette", "sat_rows", "sat_cols", "tile_count_pass", "tile_scan", "tile_write", "visibility"];
+const ENTRY_POINTS: [&str; 8] = [
+    "silhouette",
+    "sat_rows",
+    "sat_cols",
+    "tile_count_pass",
+    "tile_scan",
+    "tile_write",
+    "visibility",
+    "visibility_exact",
+];
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -325,10 +336,11 @@ impl AaPass {
             triangles,
             map_words: buffer("lixel aa mask and summed-area table", 2 * map_texels, true),
             tile_words: buffer("lixel aa statistics and tiles", STATS_WORDS + 3 * tiles, true),
-            // The lists, then each triangle's box in the map (4 f32).
+            // The lists, each triangle's box in the map (4 f32), then the
+            // queue of the exact path's pixels.
             tile_list: buffer(
-                "lixel aa triangle-tile lists and boxes",
-                u64::from(PAIR_CAPACITY) + 4 * triangles,
+                "lixel aa triangle-tile lists, boxes and pixel queue",
+                u64::from(PAIR_CAPACITY) + 4 * triangles + pixels,
                 false,
             ),
             occlusion: buffer("lixel aa occlusion words", pixels * lights, true),
@@ -417,7 +429,9 @@ impl AaPass {
                 sat_base: sized.map_texels as u32,
                 tile_stride: sized.tiles as u32,
                 box_base: PAIR_CAPACITY,
+                queue_base: PAIR_CAPACITY + 4 * sized.triangles as u32,
                 cull: u32::from(self.cull),
+                _pad: [0; 3],
             };
             queue.write_buffer(&self.params, i as u64 * PARAM_STRIDE, bytemuck::bytes_of(&raw));
             encoder.clear_buffer(&sized.map_words, 0, Some(4 * u64::from(mw) * u64::from(mh)));
@@ -444,6 +458,9 @@ impl AaPass {
             pass.dispatch_workgroups(1, 1, 1);
             flat(&mut pass, 5, triangles);
             flat(&mut pass, 6, width * height);
+            // Over the queue: sized for every pixel, the invocations past the
+            // queue's length return at once (no indirect dispatch needed).
+            flat(&mut pass, 7, width * height);
         }
         self.last = Some(LastFrame { width, height, lights: lights.len() });
     }
