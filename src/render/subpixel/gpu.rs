@@ -58,7 +58,9 @@ pub struct AaStats {
     pub wide_pixels: u32,
     /// Triangle–facet tests of the exact path, all pixels together (list
     /// entries whose box meets the pixel's footprint; every entry of its
-    /// tiles with culling off).
+    /// tiles with culling off). A pixel's walk stops once every sample is
+    /// occluded, so this count depends on the lists' (atomic) order and may
+    /// differ from run to run; the words do not.
     pub triangle_tests: u32,
 }
 
