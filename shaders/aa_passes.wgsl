@@ -466,7 +466,7 @@ fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32, poi
     let v2 = vertex(t, 2u) - point;
     let normal = cross(v1 - v0, v2 - v0);
     let scale = length(normal);
-    if !(scale > 0.0) || holds(v0, v1, v2, normal, scale, bias) {
+    if !(scale > 0.0) {
         return 0u;
     }
     // The triangle's own plane, facing away from the light and pushed away
@@ -477,7 +477,10 @@ fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32, poi
         return 0u;
     }
     var mask = half_space_mask(cols, plane * -sign(towards) - vec4<f32>(0.0, 0.0, 0.0, bias * scale));
-    if mask == 0u {
+    // The pixel's own triangle occludes nothing. Both tests only return 0,
+    // so their order does not change the result; the plane's (one table
+    // lookup) rejects more triangles for less than `holds` (three edges).
+    if mask == 0u || holds(v0, v1, v2, normal, scale, bias) {
         return 0u;
     }
     let h0 = edge_half_space(v0, v1, v2, l);
