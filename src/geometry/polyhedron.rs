@@ -618,12 +618,21 @@ impl ConvexPolyhedron {
         }
     }
 
+    /// Empties the body when fewer than four faces remain (no volume) or a
+    /// vertex overflowed; returns whether it is still non-empty.
+    pub(super) fn finish_checks(&mut self) -> bool {
+        if self.faces.len() < 4 || !self.vertices.iter().all(|v| v.is_finite()) {
+            self.clear();
+            return false;
+        }
+        true
+    }
+
     /// Drops unused vertices (renumbering the faces); empties the body when
     /// fewer than four faces remain (no volume) or a vertex overflowed.
     /// `new_index` is scratch.
     pub(super) fn finish_parts(&mut self, new_index: &mut Vec<usize>) {
-        if self.faces.len() < 4 || !self.vertices.iter().all(|v| v.is_finite()) {
-            self.clear();
+        if !self.finish_checks() {
             return;
         }
         new_index.clear();

@@ -222,14 +222,27 @@ impl Classes {
         }
         self.one = false;
         self.class64.clear();
-        self.class64.extend(pixels.map(|(&d, &b)| {
-            if !valid(d) {
-                return 0;
-            }
-            bits.iter()
-                .enumerate()
-                .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
-        }));
+        if bits.iter().enumerate().all(|(k, &bit)| bit as usize == k) {
+            // Slot `k` is bit `k` (what every caller passes): the classes
+            // are the masked bits and their complement, without a loop.
+            let mask = if bits.len() >= 32 { u32::MAX } else { (1u32 << bits.len()) - 1 };
+            self.class64.extend(pixels.map(|(&d, &b)| {
+                if valid(d) {
+                    u64::from(b & mask) | u64::from(!b & mask) << 32
+                } else {
+                    0
+                }
+            }));
+        } else {
+            self.class64.extend(pixels.map(|(&d, &b)| {
+                if !valid(d) {
+                    return 0;
+                }
+                bits.iter()
+                    .enumerate()
+                    .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
+            }));
+        }
         or_3x3(&self.class64, w, h, &mut self.tmp64, &mut self.near64);
     }
 
@@ -275,6 +288,12 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         }
     };
     classes.fill(grid, bits);
+    // Slots beyond `all` (none from the callers) are ignored.
+    let slots = if all.len() >= 32 { u32::MAX } else { (1u32 << all.len()) - 1 };
+    // Counted here and added at the end: the counts are the same, without
+    // a loop over every light at every pixel.
+    let mut covered = 0usize;
+    let mut shadowed = [0usize; 32];
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
@@ -282,9 +301,10 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 continue;
             }
             let (shadowed_bits, mixed_bits) = classes.at(i);
-            for (bit, samples) in all.iter_mut().enumerate() {
-                samples.counts.covered += 1;
-                samples.counts.shadowed += (shadowed_bits >> bit & 1) as usize;
+            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+            covered += 1;
+            for bit in set_bits(shadowed_bits) {
+                shadowed[bit] += 1;
             }
             let active = shadowed_bits | mixed_bits;
             if active == 0 {
@@ -295,18 +315,16 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let here = unproject(sx, sy, d);
             if !(here.w > 0.0) || !here.is_finite() {
-                for (bit, samples) in all.iter_mut().enumerate() {
-                    samples.counts.rejected_invalid += (active >> bit & 1) as usize;
+                for bit in set_bits(active) {
+                    all[bit].counts.rejected_invalid += 1;
                 }
                 continue;
             }
             let world = here.truncate() / here.w;
             // Light-independent surface derivatives, computed on first use.
             let mut surface: Option<Option<Surface>> = None;
-            for (bit, samples) in all.iter_mut().enumerate() {
-                if active >> bit & 1 == 0 {
-                    continue;
-                }
+            for bit in set_bits(active) {
+                let samples = &mut all[bit];
                 let frame = samples.frame;
                 let x_light = frame.homogeneous4(here);
                 samples.relevant.push(x_light);
@@ -352,6 +370,21 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             }
         }
     }
+    for (samples, &shadowed) in all.iter_mut().zip(&shadowed) {
+        samples.counts.covered += covered;
+        samples.counts.shadowed += shadowed;
+    }
+}
+
+/// The indices of the bits set in `mask`, lowest first.
+fn set_bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let bit = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            bit
+        })
+    })
 }
 
 /// A boundary pixel's surface: world tangents from a read-back normal, or
