@@ -287,6 +287,13 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             v
         }
     };
+    // Each light's `X~ = T [x; w]` rows, made once rather than per pixel
+    // (`LightFrame::homogeneous4` rebuilds them on every call).
+    let mut rows = [[DVec4::ZERO; 3]; 32];
+    for (rows, samples) in rows.iter_mut().zip(all.iter()) {
+        *rows = samples.frame.light_from_world_3x4_rows();
+    }
+    let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
     classes.fill(grid, bits);
     // Slots beyond `all` (none from the callers) are ignored.
     let slots = if all.len() >= 32 { u32::MAX } else { (1u32 << all.len()) - 1 };
@@ -326,7 +333,8 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             for bit in set_bits(active) {
                 let samples = &mut all[bit];
                 let frame = samples.frame;
-                let x_light = frame.homogeneous4(here);
+                let rows = &rows[bit];
+                let x_light = to_light(rows, here);
                 samples.relevant.push(x_light);
                 samples.relevant_world.push(world);
                 samples.depth_points.push(world);
@@ -354,11 +362,11 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 };
                 let sample = match found {
                     Surface::Given { tx, ty, .. } => {
-                        let along = |t: DVec3| frame.homogeneous4(t.extend(0.0));
+                        let along = |t: DVec3| to_light(rows, t.extend(0.0));
                         BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
                     }
                     Surface::Depth { dx4, dy4, .. } => {
-                        BoundarySample { light: x_light, d_dx: frame.homogeneous4(dx4), d_dy: frame.homogeneous4(dy4) }
+                        BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
                     }
                 };
                 if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {

@@ -44,7 +44,8 @@ struct Parts {
     jac: DMat2,
 }
 
-#[inline]
+// Always inlined: a call per sample and candidate was a tenth of the sum.
+#[inline(always)]
 fn parts(g: &DMat3, s: &BoundarySample) -> Option<Parts> {
     let (g1, g2, j) = (g.row(0), g.row(1), g.row(2));
     let w = j.dot(s.light);
