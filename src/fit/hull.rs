@@ -211,14 +211,33 @@ mod tests {
         for case in 0..200 {
             let n = 65 + case * 37;
             let points: Vec<DVec2> = (0..n)
-                .map(|k| match case % 4 {
+                .map(|k| match case % 7 {
                     0 => v(next(), next()),
                     1 => {
                         let a = next() * std::f64::consts::TAU;
                         v(a.cos(), a.sin()) * if k % 3 == 0 { 1.0 } else { next() }
                     }
                     2 => v((next() * 20.0).floor(), (next() * 20.0).floor()),
-                    _ => v(next() * 1e6, next() * 1e-6),
+                    3 => v(next() * 1e6, next() * 1e-6),
+                    // Far from the origin for their spread: the margin
+                    // scales with the coordinates.
+                    4 => v(1e7 + next(), -3e6 + next() * 1e-3),
+                    // On the circle and an ulp or two inside it.
+                    5 => {
+                        let a = next() * std::f64::consts::TAU;
+                        v(a.cos(), a.sin()) * (1.0 - f64::EPSILON * (k % 3) as f64)
+                    }
+                    // Along a square's edges, a hair outside or inside
+                    // (near-hull points right at the thinning octagon's edges).
+                    _ => {
+                        let (t, hair) = (next(), (next() - 0.5) * 1e-13);
+                        match k % 4 {
+                            0 => v(t, -hair),
+                            1 => v(1.0 + hair, t),
+                            2 => v(t, 1.0 + hair),
+                            _ => v(-hair, t),
+                        }
+                    }
                 })
                 .collect();
             let mut plain = points.clone();
