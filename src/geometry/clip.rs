@@ -33,8 +33,9 @@ pub struct ClipWorkspace {
     pub(super) silhouette: Vec<(usize, usize, usize, usize)>,
     /// The second body of a chain of clips (swapped with the result).
     pub(super) spare: ConvexPolyhedron,
-    /// Tests only: find the cap's boundary by looking up every edge's
-    /// reverse in all faces (the reference the fast path must equal).
+    /// Tests only: the general path (the cap's boundary by looking up every
+    /// edge's reverse in all faces, the general walk, the renumbering pass),
+    /// the reference the fast paths must equal.
     #[cfg(test)]
     pub(super) reference_boundary: bool,
 }

@@ -1070,10 +1070,13 @@ mod tests {
         assert!(loops(&cube).is_empty());
     }
 
-    /// The clip's cap boundary from plane edges alone equals the reference
-    /// (every edge's reverse looked up in all faces), bit for bit, over
-    /// random cuts: planes through vertices and along faces (on-plane
-    /// vertices and edges), thick tolerances, slivers.
+    /// The clip's fast paths equal the general one bit for bit: the cap
+    /// boundary from plane edges alone (or, with no vertex on the plane, the
+    /// consecutive cut points noted while cutting), the cap traced directly
+    /// as one loop, and no renumbering pass, against the reference (every
+    /// edge's reverse looked up in all faces, the general walk, the
+    /// renumbering pass), over random cuts: planes through vertices and
+    /// along faces (on-plane vertices and edges), thick tolerances, slivers.
     #[test]
     fn cap_boundary_fast_path_equals_reference() {
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
