@@ -98,29 +98,19 @@ impl ConvexPolyhedron {
         let reference = false;
         let ClipWorkspace { dist, side, new_index, cuts, on_plane, edges, walker, .. } = workspace;
         dist.clear();
+        dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
         side.clear();
-        let (mut inside, mut outside, mut on) = (0usize, 0usize, 0usize);
-        for &v in &self.vertices {
-            let d = plane.signed_distance(v);
-            let s = Side::of(d, eps);
-            match s {
-                Side::Inside => inside += 1,
-                Side::Outside => outside += 1,
-                Side::On => on += 1,
-            }
-            dist.push(d);
-            side.push(s);
-        }
-        if outside == 0 {
+        side.extend(dist.iter().map(|&d| Side::of(d, eps)));
+        if !side.contains(&Side::Outside) {
             return false;
         }
         out.clear();
-        if inside == 0 {
+        if !side.contains(&Side::Inside) {
             return true;
         }
         // With no vertex on the plane, the plane edges are exactly the
         // consecutive cut points of each cut face (noted below).
-        let simple = on == 0 && !reference;
+        let simple = !reference && !side.contains(&Side::On);
 
         // Kept vertices first, under their new indices; cut points follow.
         let Self { vertices, faces, indices } = out;
