@@ -100,17 +100,23 @@ impl ConvexPolyhedron {
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
         side.clear();
-        side.extend(dist.iter().map(|&d| Side::of(d, eps)));
-        if !side.contains(&Side::Outside) {
+        // How many vertices lie inside, on and outside the plane.
+        let mut count = [0usize; 3];
+        side.extend(dist.iter().map(|&d| {
+            let s = Side::of(d, eps);
+            count[s as usize] += 1;
+            s
+        }));
+        if count[Side::Outside as usize] == 0 {
             return false;
         }
         out.clear();
-        if !side.contains(&Side::Inside) {
+        if count[Side::Inside as usize] == 0 {
             return true;
         }
         // With no vertex on the plane, the plane edges are exactly the
         // consecutive cut points of each cut face (noted below).
-        let simple = !reference && !side.contains(&Side::On);
+        let simple = !reference && count[Side::On as usize] == 0;
 
         // Kept vertices first, under their new indices; cut points follow.
         let Self { vertices, faces, indices } = out;
