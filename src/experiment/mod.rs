@@ -38,7 +38,7 @@ use std::time::{Duration, Instant};
 
 use glam::{DVec3, UVec2};
 
-use crate::mesh::{LoadReport, RayCaster, Scene, SceneOptions, ShadowMasks};
+use crate::mesh::{LoadReport, PrimaryView, RayCaster, Scene, SceneOptions, ShadowMasks};
 use crate::optimize::{OptimizeOptions, SearchStrategy};
 use crate::render::subpixel::AaSamples;
 use crate::render::{
@@ -547,6 +547,9 @@ pub struct Runner<'a> {
     scene: Scene,
     camera: Camera,
     caster: Option<RayCaster>,
+    /// The camera's primary rays at the screen size, traced on the first
+    /// truth and shared by every light (the camera never changes).
+    primary: Option<PrimaryView>,
     renderer: Renderer,
     stages: RunStages,
 }
@@ -598,7 +601,7 @@ impl<'a> Runner<'a> {
         // Every configuration and method sees the scene through this one
         // camera: draw it once, shade the capture per method (same masks).
         renderer.capture_view(&camera)?;
-        Ok(Self { config, scene, camera, caster, renderer, stages: RunStages::default() })
+        Ok(Self { config, scene, camera, caster, primary: None, renderer, stages: RunStages::default() })
     }
 
     /// The camera.
@@ -682,7 +685,13 @@ impl<'a> Runner<'a> {
     /// Renderer failures.
     pub fn truths(&mut self, light: Light) -> Result<(Option<ShadowMasks>, Option<ShadowMasks>), ExperimentError> {
         let size = self.config.screen;
-        let ray = self.caster.as_ref().map(|c| c.trace_masks(&self.camera, &[light], size, size));
+        let ray = match &self.caster {
+            Some(caster) => {
+                let view = self.primary.get_or_insert_with(|| caster.primary_view(&self.camera, size, size));
+                Some(caster.trace_masks_from(view, &[light]))
+            }
+            None => None,
+        };
         let focused = if matches!(self.config.truth, Truth::Focused4000 | Truth::Both) {
             let m = self.problem(light, 4000)?.solve(&Parameterization::Focused)?;
             Some(self.masks(&m)?)
