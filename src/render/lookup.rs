@@ -454,6 +454,8 @@ pub(crate) struct ShadowMaps {
     pub(crate) bind_group: wgpu::BindGroup,
     pub(crate) width: u32,
     pub(crate) height: u32,
+    /// What each layer holds (`reuse.rs`).
+    pub(crate) drawn: super::reuse::MapRecords,
 }
 
 impl ShadowMaps {
@@ -526,7 +528,17 @@ impl ShadowMaps {
             Some((texture, _, layers)) => (Some(texture), layers),
             None => (None, Vec::new()),
         };
-        Self { depth_array, color, depth_layers, color_layers, sgsm, bind_group, width, height }
+        Self {
+            depth_array,
+            color,
+            depth_layers,
+            color_layers,
+            sgsm,
+            bind_group,
+            width,
+            height,
+            drawn: Default::default(),
+        }
     }
 
     pub(crate) fn layers(&self) -> u32 {
