@@ -2,7 +2,9 @@
 //! camera image and masks as drawing every object, for every classical
 //! method (PSM's inverted and unclipped lights included), while it does
 //! leave objects out. Likewise keeping a layer's map for a later frame
-//! (`RendererOptions::reuse_maps`).
+//! (`RendererOptions::reuse_maps`), and drawing several lights in one frame
+//! (each light's bits are those of its own frame; the experiment's shared
+//! frame relies on it).
 
 #![cfg(feature = "render")]
 
@@ -135,4 +137,64 @@ fn reused_maps_give_the_frames_of_drawn_maps() {
     timed.render(&frame).unwrap();
     let again = timed.render(&frame).unwrap();
     assert_eq!(again.maps_reused, u32::from(!timed.timestamps_enabled()) * 2);
+}
+
+#[test]
+fn each_light_of_a_frame_gets_the_bits_of_its_own_frame() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(64);
+    let mut matrices = Vec::new();
+    for p in [Parameterization::Focused, Parameterization::Normal, Parameterization::LiSpsm(Default::default())] {
+        matrices.extend(lixel_matrices(&scene, &camera, &p));
+    }
+    assert!(matrices.len() >= 6);
+    let options = RendererOptions { timestamps: false, ..Default::default() };
+    let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let own: Vec<_> = matrices
+        .iter()
+        .map(|m| {
+            let frame = Frame {
+                camera: &camera,
+                lights: std::slice::from_ref(m),
+                masks: true,
+                analysis: None,
+                lookup: Default::default(),
+            };
+            renderer.render(&frame).unwrap();
+            renderer.read_masks().unwrap()
+        })
+        .collect();
+    // Every count of layers up to seven (six is a cube map on GL if unguarded).
+    for n in 2..=matrices.len().min(7) {
+        let frame =
+            Frame { camera: &camera, lights: &matrices[..n], masks: true, analysis: None, lookup: Default::default() };
+        renderer.render(&frame).unwrap();
+        let shared = renderer.read_masks().unwrap();
+        for (bit, single) in own[..n].iter().enumerate() {
+            assert_eq!(shared.depth, single.depth, "{n} lights");
+            let differing = (0..single.shadow.len())
+                .filter(|&i| {
+                    shared.shadow[i] >> bit & 1 != single.shadow[i] & 1
+                        || shared.facing[i] >> bit & 1 != single.facing[i] & 1
+                })
+                .count();
+            assert_eq!(differing, 0, "{n} lights: light {bit}'s bits differ from its own frame's");
+        }
+    }
+}
+
+/// A matrix per test light (directional and point) and per lookup-free method.
+fn lixel_matrices(scene: &lixel::mesh::Scene, camera: &Camera, p: &Parameterization) -> Vec<lixel::LightMatrix> {
+    let lights = [
+        Light::directional(DVec3::new(0.6, -1.0, 0.35)),
+        Light::point(DVec3::new(-8.0, 30.0, 12.0)),
+        Light::point(DVec3::new(6.0, 18.0, -9.0)),
+    ];
+    lights
+        .iter()
+        .filter_map(|&l| {
+            ShadowProblem::new(*camera, l, scene.bounds(), ShadowMapSize::square(128)).and_then(|q| q.solve(p)).ok()
+        })
+        .collect()
 }

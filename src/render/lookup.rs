@@ -468,9 +468,14 @@ impl ShadowMaps {
         height: u32,
         layers: u32,
     ) -> Self {
-        // At least two layers: the GL backend makes a one-layer texture a
-        // plain 2D texture, which then reads as zero through the array view.
-        let layers = layers.max(2);
+        // At least two layers and never six: the GL backend makes a one-layer
+        // texture a plain 2D texture and a six-layer one a cube map, which
+        // then read wrongly through the array view (six lights' masks were
+        // all shadow).
+        let layers = match layers.max(2) {
+            6 => 7,
+            n => n,
+        };
         let array = |label: &str, format| {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
