@@ -257,6 +257,11 @@ impl LookupState {
         }
     }
 
+    /// Replaces the maps by the smallest; frames grow them again on demand.
+    pub(crate) fn release_maps(&mut self, device: &wgpu::Device) {
+        self.maps = ShadowMaps::new(device, &self.maps_layout, self.map_color, self.sweep.as_ref(), 1, 1, 1);
+    }
+
     /// Builds the view-capture pipelines of this mode's camera shader.
     pub(crate) fn ensure_deferred(&mut self, device: &wgpu::Device, layouts: &SceneLayouts) {
         self.camera.deferred(device, layouts, &self.maps_layout);

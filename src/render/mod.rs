@@ -611,6 +611,16 @@ impl Renderer {
         Ok(())
     }
 
+    /// Drops every lookup mode's shadow maps; the next frame allocates what
+    /// it needs. Maps only grow otherwise (in size and in layers), so frames
+    /// with large maps after a frame of many lights would keep, and clear
+    /// on first use, as many large layers.
+    pub fn release_maps(&mut self) {
+        for state in &mut self.lookups {
+            state.release_maps(&self.device);
+        }
+    }
+
     /// Drops the view capture: every frame draws its camera pass again.
     pub fn release_view(&mut self) {
         self.capture = None;
