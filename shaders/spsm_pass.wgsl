@@ -38,6 +38,15 @@ struct ShadowPass {
 // The scene's VertexRaw words (7 per vertex: position xyz, normal xyz, albedo).
 @group(0) @binding(1) var<storage, read> scene_vertices: array<u32>;
 @group(0) @binding(2) var<storage, read> scene_indices: array<u32>;
+// The centre-sampled depth of the texel (session 5): what a standard shadow
+// pass would store, min over the triangles covering the texel centre of
+// spsm_depth_key(zeta at the centre + the standard pass's bias), kept as
+// the complement of its bits with atomicMax so that the cleared word 0
+// means "no triangle covers the centre". One map's words, row-major with
+// the map's width (the renderer binds this light's layer of the buffer with
+// a dynamic offset). The lookup falls back to it where its own recovery is
+// unsure (spsm_lookup.wgsl, spsm_standard).
+@group(1) @binding(0) var<storage, read_write> spsm_centre: array<atomic<u32>>;
 
 struct SpsmVertex {
     @builtin(position) clip: vec4<f32>,
@@ -168,6 +177,36 @@ fn spsm_depth_key(zeta: f32) -> f32 {
     return 0.5 + 0.5 * zeta / (1.0 + abs(zeta));
 }
 
+// A triangle covering texel centre `c` (edges included) offers its depth
+// there, biased as shadow.wgsl biases a standard map (constant plus the
+// slope scale times the larger per-texel depth change, clamped when the
+// clamp is set; the constant is SPSM_BIAS, in the zeta range, as the
+// lookup's), to the texel's centre-sampled depth.
+fn spsm_store_centre(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>, zeta_c: f32, g: vec2<f32>) {
+    let area = spsm_cross(t1 - t0, t2 - t0);
+    let e0 = spsm_cross(t1 - t0, c - t0) * area;
+    let e1 = spsm_cross(t2 - t1, c - t1) * area;
+    let e2 = spsm_cross(t0 - t2, c - t2) * area;
+    if area == 0.0 || e0 < 0.0 || e1 < 0.0 || e2 < 0.0 {
+        return;
+    }
+    var bias = SPSM_BIAS + shadow_pass.depth.w * max(abs(g.x), abs(g.y));
+    if shadow_pass.clamp.x > 0.0 {
+        bias = min(bias, shadow_pass.clamp.x);
+    }
+    spsm_offer_centre(c, zeta_c + bias);
+}
+
+// Offers a centre depth (biased) to the centre-sampled word of the texel
+// whose centre is `c`.
+fn spsm_offer_centre(c: vec2<f32>, zeta: f32) {
+    let width = u32(shadow_pass.clamp.y);
+    let index = u32(c.y) * width + u32(c.x);
+    if index < arrayLength(&spsm_centre) && u32(c.x) < width {
+        atomicMax(&spsm_centre[index], ~bitcast<u32>(spsm_depth_key(zeta)));
+    }
+}
+
 struct SpsmOutput {
     @location(0) texel: vec4<u32>,
     @builtin(frag_depth) depth: f32,
@@ -179,6 +218,7 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     if in.mode == 1u {
         // Clipped fallback: the hardware's depth z / w at the texel centre.
         let zeta = in.clip.z;
+        spsm_offer_centre(floor(in.clip.xy) + 0.5, zeta + SPSM_BIAS);
         out.texel = vec4<u32>(SPSM_DEPTH_ONLY, 0u, 0u, spsm_encode_depth(zeta) << 16u);
         out.depth = spsm_depth_key(zeta);
         return out;
@@ -199,6 +239,7 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     } else {
         zeta_c = in.zeta.x + dot(g, c - in.t0);
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
+        spsm_store_centre(in.t0, in.t1, in.t2, c, zeta_c, g);
     }
     let slopes = g * shadow_pass.clamp.yz;
     out.texel = vec4<u32>(

@@ -37,6 +37,10 @@ impl Renderer {
     ) -> ShadowPassCounts {
         let mut counts = ShadowPassCounts { unclipped_unavailable: 0, triangles: 0 };
         let last = slots.len().saturating_sub(1);
+        if let Some(centre) = &state.maps.centre {
+            // The centre-sampled depths start empty (word 0) every frame.
+            encoder.clear_buffer(&centre.buffer, 0, None);
+        }
         for (i, m) in slots.iter().enumerate() {
             let wanted = if m.needs_unclipped_depth { DepthClip::Unclipped } else { DepthClip::Clipped };
             // Conservative rasterization draws its own (reshaped) triangles: no culling.
@@ -83,6 +87,9 @@ impl Renderer {
             pass.set_scissor_rect(0, 0, w, h);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &state.shadow.bind_group, &[(i as u64 * SHADOW_SLOT_STRIDE) as u32]);
+            if let Some(centre) = &state.maps.centre {
+                pass.set_bind_group(1, &centre.pass_bind_group, &[(i as u64 * centre.stride) as u32]);
+            }
             counts.triangles += if state.pulls_vertices {
                 // The pass's own depth is never clipped at near and far.
                 self.draw_pulled(&mut pass, &m.clip_from_world, DepthClip::Unclipped)

@@ -58,15 +58,33 @@ pub struct SpsmOptions {
     /// focused+spsm 434.8 against 296.7 misclassified), hence off in
     /// [`Self::PAPER`].
     pub thin_casters: bool,
+    /// Hybrid lookup (issue 16, session 5): where p lies on none of the
+    /// stored triangles of its 3x3 neighbourhood (the paper's "uncertain"
+    /// pixels: a uniform or mixed depth-test pattern, the silhouette
+    /// recovery's domain), take the standard lookup's verdict instead,
+    /// from a centre-sampled depth the conservative pass keeps beside the
+    /// triangle (`spsm_store_centre` in `shaders/spsm_pass.wgsl`). Verdicts
+    /// from a stored triangle containing p or from p's own plane stay
+    /// SPSM's. Measured per path on the default preset (issue-16 note,
+    /// session 5): the recovery's and the uniform patterns' verdicts were
+    /// worse than the standard's; the triangle paths better.
+    pub standard_fallback: bool,
 }
 
 impl SpsmOptions {
     /// The paper's settings (exponent 5, bias 1e-5) with the packing
     /// tolerance; the default.
-    pub const PAPER: Self = Self { exponent: 5.0, bias: 1e-5, packing_tolerance: true, thin_casters: false };
+    pub const PAPER: Self =
+        Self { exponent: 5.0, bias: 1e-5, packing_tolerance: true, thin_casters: false, standard_fallback: true };
 
-    /// [`Self::PAPER`] with [`thin_casters`](Self::thin_casters).
-    pub const THIN_CASTERS: Self = Self { thin_casters: true, ..Self::PAPER };
+    /// [`Self::PAPER`] without the [`standard_fallback`](Self::standard_fallback):
+    /// the paper's lookup alone, silhouette recovery included.
+    pub const SUBPIXEL_ONLY: Self = Self { standard_fallback: false, ..Self::PAPER };
+
+    /// [`Self::SUBPIXEL_ONLY`] with [`thin_casters`](Self::thin_casters)
+    /// (the thin-band recovery is what keeps sub-texel wires; the
+    /// fallback would hand those pixels to the standard lookup).
+    pub const THIN_CASTERS: Self = Self { thin_casters: true, ..Self::SUBPIXEL_ONLY };
 }
 
 impl Default for SpsmOptions {
@@ -81,6 +99,7 @@ impl PartialEq for SpsmOptions {
             && self.bias.to_bits() == other.bias.to_bits()
             && self.packing_tolerance == other.packing_tolerance
             && self.thin_casters == other.thin_casters
+            && self.standard_fallback == other.standard_fallback
     }
 }
 
@@ -88,7 +107,8 @@ impl Eq for SpsmOptions {}
 
 impl Hash for SpsmOptions {
     fn hash<H: Hasher>(&self, state: &mut H) {
-        (self.exponent.to_bits(), self.bias.to_bits(), self.packing_tolerance, self.thin_casters).hash(state);
+        (self.exponent.to_bits(), self.bias.to_bits(), self.packing_tolerance, self.thin_casters, self.standard_fallback)
+            .hash(state);
     }
 }
 
@@ -98,8 +118,11 @@ fn constants(options: &SpsmOptions) -> String {
     // meaningless; the paper's 5 stands in.
     let exponent = if options.exponent.is_finite() && options.exponent > 0.0 { options.exponent } else { 5.0 };
     let bias = if options.bias.is_finite() { options.bias } else { 0.0 };
+    // The paths of spsm_lookup.wgsl's in_shadow handed to the standard
+    // lookup: SPSM_PATH_UNIFORM | SPSM_PATH_RECOVER.
+    let fallback = if options.standard_fallback { 16 | 32 } else { 0 };
     format!(
-        "const SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\n",
+        "const SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\nconst SPSM_FALLBACK: u32 = {fallback}u;\n",
         if options.packing_tolerance { 1.0f32 } else { 0.0 },
         options.thin_casters
     )
