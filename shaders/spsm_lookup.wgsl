@@ -37,12 +37,13 @@
 // up to 64 words (256 bytes, the dynamic-offset alignment of the pass).
 @group(1) @binding(4) var<storage, read> spsm_centre: array<u32>;
 
-// The standard lookup's verdict at texel `k`, from the centre-sampled depth
-// the conservative pass kept beside the triangle (session 5): 0 lit, 1
-// shadowed, 2 unavailable (the buffer is too small: maps larger than the
-// device's storage-buffer limit). As lookup_depth_compare.wgsl: the nearest
-// surface at the texel centre, biased as a standard map, against p's depth.
-fn spsm_standard(light: Light, k: vec2<i32>, zeta: f32) -> u32 {
+// The standard lookup's verdict at texel `k` for the receiver at `world`,
+// from the centre-sampled depth the conservative pass kept beside the
+// triangle (session 5): 0 lit, 1 shadowed, 2 unavailable (the buffer is too
+// small: maps beyond the device's storage-buffer limit). As
+// lookup_depth_compare.wgsl: the nearest surface at the texel centre in
+// biased linear light depth against the receiver's.
+fn spsm_standard(light: Light, k: vec2<i32>, world: vec3<f32>) -> u32 {
     let dims = textureDimensions(spsm_texels).xy;
     let stride = (dims.x * dims.y + 63u) / 64u * 64u;
     let index = light.layer * stride + u32(k.y) * u32(light.map_size.x) + u32(k.x);
@@ -53,17 +54,17 @@ fn spsm_standard(light: Light, k: vec2<i32>, zeta: f32) -> u32 {
     if word == 0u {
         return 0u;
     }
-    let s = 2.0 * bitcast<f32>(~word) - 1.0;
-    return select(0u, 1u, s / max(1.0 - abs(s), 1e-30) < zeta);
+    let depth = clamp(linear_light_depth(light.position, light.depth.xy, world), 0.0, 1.0);
+    return select(0u, 1u, bitcast<f32>(~word) < depth);
 }
 
-// The verdict of an uncertain path (`path`, a bit of SPSM_FALLBACK): the
-// standard lookup's where the fallback covers the path, else SPSM's own.
-fn spsm_decide(light: Light, k: vec2<i32>, zeta: f32, path: u32, own_verdict: bool) -> bool {
+// The verdict of path `path` (an SPSM_PATH_* bit): the standard lookup's
+// where SPSM_FALLBACK covers the path, else SPSM's own.
+fn spsm_decide(light: Light, k: vec2<i32>, world: vec3<f32>, path: u32, own_verdict: bool) -> bool {
     if (SPSM_FALLBACK & path) == 0u {
         return own_verdict;
     }
-    let standard = spsm_standard(light, k, zeta);
+    let standard = spsm_standard(light, k, world);
     return select(own_verdict, standard == 1u, standard != 2u);
 }
 
@@ -381,7 +382,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let own_plane = spsm_plane_at(own, p);
     let own_slack = SPSM_BIAS + SPSM_TOLERANCE * own_plane.y;
     if spsm_inside(own, p) {
-        return spsm_decide(light, k, zeta, SPSM_PATH_OWN, own_plane.x < zeta - own_slack);
+        return spsm_decide(light, k, world, SPSM_PATH_OWN, own_plane.x < zeta - own_slack);
     }
     // The own texel's closest triangle, extended to p, is not in front of p
     // by more than its own depth change across one texel (a curved
@@ -407,7 +408,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
             if t.kind == 0u && spsm_inside(t, p) {
                 let plane = spsm_plane_at(spsm_slopes(light, t, ki), p);
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {
-                    return spsm_decide(light, k, zeta, SPSM_PATH_NEIGHBOUR, true);
+                    return spsm_decide(light, k, world, SPSM_PATH_NEIGHBOUR, true);
                 }
                 on_surface = on_surface || own_clear;
             }
@@ -417,13 +418,13 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         }
     }
     if on_own_plane {
-        return spsm_decide(light, k, zeta, SPSM_PATH_OWN_PLANE, false);
+        return spsm_decide(light, k, world, SPSM_PATH_OWN_PLANE, false);
     }
     if on_surface {
-        return spsm_decide(light, k, zeta, SPSM_PATH_SURFACE, false);
+        return spsm_decide(light, k, world, SPSM_PATH_SURFACE, false);
     }
     if pattern == 0u || pattern == 0x1ffu {
-        return spsm_decide(light, k, zeta, SPSM_PATH_UNIFORM, pattern != 0u);
+        return spsm_decide(light, k, world, SPSM_PATH_UNIFORM, pattern != 0u);
     }
-    return spsm_decide(light, k, zeta, SPSM_PATH_RECOVER, spsm_recover(light, k, pattern, p));
+    return spsm_decide(light, k, world, SPSM_PATH_RECOVER, spsm_recover(light, k, pattern, p));
 }

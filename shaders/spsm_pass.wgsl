@@ -39,10 +39,11 @@ struct ShadowPass {
 @group(0) @binding(1) var<storage, read> scene_vertices: array<u32>;
 @group(0) @binding(2) var<storage, read> scene_indices: array<u32>;
 // The centre-sampled depth of the texel (session 5): what a standard shadow
-// pass would store, min over the triangles covering the texel centre of
-// spsm_depth_key(zeta at the centre + the standard pass's bias), kept as
-// the complement of its bits with atomicMax so that the cleared word 0
-// means "no triangle covers the centre". One map's words, row-major with
+// pass (shadow.wgsl) would store, the minimum over the triangles covering
+// the texel centre of their biased linear light depth there, kept as the
+// complement of its bits with atomicMax (non-negative floats order as
+// their bits) so that the cleared word 0 means "no triangle covers the
+// centre". One map's words, row-major with
 // the map's width (the renderer binds this light's layer of the buffer with
 // a dynamic offset). The lookup falls back to it where its own recovery is
 // unsure (spsm_lookup.wgsl, spsm_standard).
@@ -56,12 +57,21 @@ struct SpsmVertex {
     @location(3) @interpolate(flat) zeta: vec3<f32>,
     // 0: conservative; 1: clipped fallback.
     @location(4) @interpolate(flat) mode: u32,
+    // The world positions and clip w of the vertices (the centre-sampled
+    // depth: perspective-correct interpolation at the texel centre).
+    @location(5) @interpolate(flat) x0: vec3<f32>,
+    @location(6) @interpolate(flat) x1: vec3<f32>,
+    @location(7) @interpolate(flat) x2: vec3<f32>,
+    @location(8) @interpolate(flat) w: vec3<f32>,
+}
+
+fn spsm_world_of(index_slot: u32) -> vec3<f32> {
+    let v = scene_indices[index_slot] * 7u;
+    return vec3<f32>(bitcast<f32>(scene_vertices[v]), bitcast<f32>(scene_vertices[v + 1u]), bitcast<f32>(scene_vertices[v + 2u]));
 }
 
 fn spsm_clip_of(index_slot: u32) -> vec4<f32> {
-    let v = scene_indices[index_slot] * 7u;
-    let p = vec3<f32>(bitcast<f32>(scene_vertices[v]), bitcast<f32>(scene_vertices[v + 1u]), bitcast<f32>(scene_vertices[v + 2u]));
-    return shadow_pass.clip_from_world * vec4<f32>(p, 1.0);
+    return shadow_pass.clip_from_world * vec4<f32>(spsm_world_of(index_slot), 1.0);
 }
 
 fn spsm_to_texel(clip: vec4<f32>) -> vec2<f32> {
@@ -98,6 +108,10 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     out.t2 = t[2];
     out.zeta = vec3<f32>(c[0].z / c[0].w, c[1].z / c[1].w, c[2].z / c[2].w);
     out.mode = 0u;
+    out.x0 = spsm_world_of(first);
+    out.x1 = spsm_world_of(first + 1u);
+    out.x2 = spsm_world_of(first + 2u);
+    out.w = vec3<f32>(c[0].w, c[1].w, c[2].w);
 
     // The padded bounding box and the right triangle (lo, lo + 2 (hi - lo) x, lo + 2 (hi - lo) y) around it.
     let margin = 0.5 + 1.0 / 64.0;
@@ -177,12 +191,24 @@ fn spsm_depth_key(zeta: f32) -> f32 {
     return 0.5 + 0.5 * zeta / (1.0 + abs(zeta));
 }
 
-// A triangle covering texel centre `c` (edges included) offers its depth
-// there, biased as shadow.wgsl biases a standard map (constant plus the
-// slope scale times the larger per-texel depth change, clamped when the
-// clamp is set; the constant is SPSM_BIAS, in the zeta range, as the
-// lookup's), to the texel's centre-sampled depth.
-fn spsm_store_centre(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>, zeta_c: f32, g: vec2<f32>) {
+// The linear light depth (light_depth.wgsl) of the triangle's plane at
+// texel position `q`: the world point there by perspective-correct
+// barycentrics (weights b_i / w_i).
+fn spsm_linear_depth_at(in: SpsmVertex, q: vec2<f32>) -> f32 {
+    let b = vec3<f32>(spsm_cross(in.t2 - in.t1, q - in.t1), spsm_cross(in.t0 - in.t2, q - in.t2), spsm_cross(in.t1 - in.t0, q - in.t0)) / in.w;
+    let x = (b.x * in.x0 + b.y * in.x1 + b.z * in.x2) / (b.x + b.y + b.z);
+    return linear_light_depth(shadow_pass.position, shadow_pass.depth.xy, x);
+}
+
+// A triangle covering texel centre `c` (edges included) offers its linear
+// light depth there to the texel's centre-sampled depth, biased as
+// shadow.wgsl biases a standard map: constant plus slope scale times the
+// larger change over one texel (here from the plane at c + x and c + y
+// rather than the rasterizer's dpdx / dpdy), clamped when a clamp is set.
+fn spsm_store_centre(in: SpsmVertex, c: vec2<f32>) {
+    let t0 = in.t0;
+    let t1 = in.t1;
+    let t2 = in.t2;
     let area = spsm_cross(t1 - t0, t2 - t0);
     let e0 = spsm_cross(t1 - t0, c - t0) * area;
     let e1 = spsm_cross(t2 - t1, c - t1) * area;
@@ -190,20 +216,16 @@ fn spsm_store_centre(t0: vec2<f32>, t1: vec2<f32>, t2: vec2<f32>, c: vec2<f32>, 
     if area == 0.0 || e0 < 0.0 || e1 < 0.0 || e2 < 0.0 {
         return;
     }
-    var bias = SPSM_BIAS + shadow_pass.depth.w * max(abs(g.x), abs(g.y));
+    let depth = spsm_linear_depth_at(in, c);
+    let slope = max(abs(spsm_linear_depth_at(in, c + vec2<f32>(1.0, 0.0)) - depth), abs(spsm_linear_depth_at(in, c + vec2<f32>(0.0, 1.0)) - depth));
+    var bias = shadow_pass.depth.z + shadow_pass.depth.w * slope;
     if shadow_pass.clamp.x > 0.0 {
         bias = min(bias, shadow_pass.clamp.x);
     }
-    spsm_offer_centre(c, zeta_c + bias);
-}
-
-// Offers a centre depth (biased) to the centre-sampled word of the texel
-// whose centre is `c`.
-fn spsm_offer_centre(c: vec2<f32>, zeta: f32) {
     let width = u32(shadow_pass.clamp.y);
     let index = u32(c.y) * width + u32(c.x);
     if index < arrayLength(&spsm_centre) && u32(c.x) < width {
-        atomicMax(&spsm_centre[index], ~bitcast<u32>(spsm_depth_key(zeta)));
+        atomicMax(&spsm_centre[index], ~bitcast<u32>(clamp(depth + bias, 0.0, 1.0)));
     }
 }
 
@@ -218,7 +240,6 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     if in.mode == 1u {
         // Clipped fallback: the hardware's depth z / w at the texel centre.
         let zeta = in.clip.z;
-        spsm_offer_centre(floor(in.clip.xy) + 0.5, zeta + SPSM_BIAS);
         out.texel = vec4<u32>(SPSM_DEPTH_ONLY, 0u, 0u, spsm_encode_depth(zeta) << 16u);
         out.depth = spsm_depth_key(zeta);
         return out;
@@ -239,7 +260,7 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     } else {
         zeta_c = in.zeta.x + dot(g, c - in.t0);
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
-        spsm_store_centre(in.t0, in.t1, in.t2, c, zeta_c, g);
+        spsm_store_centre(in, c);
     }
     let slopes = g * shadow_pass.clamp.yz;
     out.texel = vec4<u32>(
