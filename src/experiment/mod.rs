@@ -426,7 +426,7 @@ pub fn camera_for(config: &ExperimentConfig, scene: &Scene) -> Result<Camera, Ex
         return Ok(Camera::look_at(
             f.eye,
             f.target,
-            DVec3::Y,
+            world_up(f.eye, f.target),
             config.fov_y_degrees.to_radians(),
             UVec2::splat(config.screen),
             f.near,
@@ -439,7 +439,7 @@ pub fn camera_for(config: &ExperimentConfig, scene: &Scene) -> Result<Camera, Ex
         let eye = config.eye.unwrap_or(DVec3::new(3.0, 1.7, 760.0));
         let target = config.target.unwrap_or(eye + DVec3::new(0.05, -0.04, -1.0));
         let fov = config.fov_y_degrees.to_radians();
-        return Ok(Camera::look_at(eye, target, DVec3::Y, fov, UVec2::splat(config.screen), 0.1, 1500.0)?);
+        return Ok(Camera::look_at(eye, target, world_up(eye, target), fov, UVec2::splat(config.screen), 0.1, 1500.0)?);
     }
     let bounds = scene.bounds().scene();
     let center = bounds.center();
@@ -452,12 +452,24 @@ pub fn camera_for(config: &ExperimentConfig, scene: &Scene) -> Result<Camera, Ex
     Ok(Camera::look_at(
         eye,
         target,
-        DVec3::Y,
+        world_up(eye, target),
         config.fov_y_degrees.to_radians(),
         UVec2::splat(config.screen),
         far * 1e-3,
         far,
     )?)
+}
+
+/// The camera's up vector: the world's `+y`, or `-z` when the view looks
+/// straight up or down (a top-down `--eye`/`--target`), where `+y` leaves the
+/// image's orientation undefined.
+fn world_up(eye: DVec3, target: DVec3) -> DVec3 {
+    let dir = (target - eye).normalize_or_zero();
+    if dir.cross(DVec3::Y).length() < 1e-6 {
+        DVec3::NEG_Z
+    } else {
+        DVec3::Y
+    }
 }
 
 /// The light of configuration `index`: uniform on the upper hemisphere around
@@ -978,4 +990,32 @@ pub fn run(
     let completeness =
         finish::Completeness { adapter: crate::render::device::describe(&device.adapter_info()), ..Default::default() };
     finish::finish(&mut runner, config, dir.path(), &rows, &completeness, warnings, started)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A top-down `--eye`/`--target` (straight down, or up) is a camera, not
+    /// "up is parallel to the view direction"; the screen's up is then `-z`.
+    #[test]
+    fn top_down_views_get_a_camera() {
+        for (eye, target) in [
+            (DVec3::new(0.0, 5.0, 0.0), DVec3::ZERO),
+            (DVec3::new(1.0, -3.0, 2.0), DVec3::new(1.0, 4.0, 2.0)),
+            (DVec3::new(0.3, 30.0, 0.3), DVec3::new(0.3, 0.0, 0.3 + 1e-9)),
+        ] {
+            let config = ExperimentConfig {
+                eye: Some(eye),
+                target: Some(target),
+                screen: 32,
+                ..ExperimentConfig::preset(Preset::Quick)
+            };
+            let scene = crate::mesh::ProceduralScene { triangle_budget: 200, ..Default::default() }.build();
+            let camera = camera_for(&config, &scene).unwrap_or_else(|e| panic!("{eye} -> {target}: {e}"));
+            assert!(camera.eye().distance(eye) < 1e-12);
+        }
+        assert_eq!(world_up(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0)), DVec3::Y);
+        assert_eq!(world_up(DVec3::Y, DVec3::ZERO), DVec3::NEG_Z);
+    }
 }

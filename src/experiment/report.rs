@@ -29,7 +29,8 @@ pub struct MethodSummary {
     pub total: u64,
     /// Median misclassified pixels.
     pub median: f64,
-    /// `100 (mean / mean_optimized - 1)`; `None` without the optimized method.
+    /// `100 (mean / mean_optimized - 1)`; `None` without the optimized method
+    /// or when its mean is zero.
     pub percent_more_than_optimized: Option<f64>,
     /// Mean frames to settle (scene-optimized methods).
     pub mean_frames: f64,
@@ -118,9 +119,8 @@ pub(super) fn summarize(
                 mean: mean(&values),
                 total: values.iter().sum(),
                 median,
-                percent_more_than_optimized: config
-                    .methods
-                    .contains(&MethodSpec::OPTIMIZED)
+                // Undefined (not NaN or infinite) when the optimized method misclassified nothing.
+                percent_more_than_optimized: (config.methods.contains(&MethodSpec::OPTIMIZED) && optimized_mean > 0.0)
                     .then(|| 100.0 * (mean(&values) / optimized_mean - 1.0)),
                 mean_frames: mean(&frames),
                 mean_visibility_error: (pixels > 0).then(|| error / pixels as f64),

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::Mode;
 use base64::Engine as _;
-use glam::{Mat3, Mat4, Vec3};
+use glam::{DMat3, DMat4, DVec3, Mat4, Vec3};
 
 use super::load::{RawObject, RawScene, Repair, SceneLoadError};
 
@@ -67,7 +67,7 @@ pub enum GltfError {
 struct Instance<'a> {
     primitive: ::gltf::Primitive<'a>,
     mesh_name: String,
-    transform: Mat4,
+    transform: DMat4,
 }
 
 /// Reads `bytes` (the file at `path`) into raw objects, one per mesh
@@ -81,13 +81,13 @@ pub(crate) fn read_gltf(bytes: &[u8], path: &Path, max_triangles: usize) -> Resu
     match document.default_scene().or_else(|| document.scenes().next()) {
         Some(scene) => {
             for root in scene.nodes() {
-                visit(&mut instances, root, Mat4::IDENTITY, 0, path)?;
+                visit(&mut instances, root, DMat4::IDENTITY, 0, path)?;
             }
         }
         // No scene at all: every mesh once, untransformed.
         None => {
             for mesh in document.meshes() {
-                push_mesh(&mut instances, &mesh, Mat4::IDENTITY);
+                push_mesh(&mut instances, &mesh, DMat4::IDENTITY);
             }
         }
     }
@@ -133,14 +133,14 @@ pub(crate) fn read_gltf(bytes: &[u8], path: &Path, max_triangles: usize) -> Resu
 fn visit<'a>(
     instances: &mut Vec<Instance<'a>>,
     node: ::gltf::Node<'a>,
-    parent: Mat4,
+    parent: DMat4,
     depth: usize,
     path: &Path,
 ) -> Result<(), GltfError> {
     if depth > MAX_NODE_DEPTH {
         return Err(GltfError::Hierarchy { path: path.into() });
     }
-    let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+    let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
     if let Some(mesh) = node.mesh() {
         push_mesh(instances, &mesh, transform);
     }
@@ -150,7 +150,7 @@ fn visit<'a>(
     Ok(())
 }
 
-fn push_mesh<'a>(instances: &mut Vec<Instance<'a>>, mesh: &::gltf::Mesh<'a>, transform: Mat4) {
+fn push_mesh<'a>(instances: &mut Vec<Instance<'a>>, mesh: &::gltf::Mesh<'a>, transform: DMat4) {
     let name = mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
     for primitive in mesh.primitives() {
         instances.push(Instance { primitive, mesh_name: name.clone(), transform });
@@ -190,11 +190,11 @@ fn read_primitive(instance: &Instance, buffers: &[Vec<u8>], path: &Path) -> Resu
     let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(Vec::as_slice));
     let Some(positions) = reader.read_positions() else { return Ok(None) };
     let m = instance.transform;
-    let positions: Vec<Vec3> = positions.map(|p| m.transform_point3(Vec3::from_array(p))).collect();
-    let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
-    let normals = reader
-        .read_normals()
-        .map(|n| n.map(|n| (normal_matrix * Vec3::from_array(n)).normalize_or_zero()).collect::<Vec<_>>());
+    let positions: Vec<DVec3> = positions.map(|p| m.transform_point3(Vec3::from_array(p).as_dvec3())).collect();
+    let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
+    let normals = reader.read_normals().map(|n| {
+        n.map(|n| (normal_matrix * Vec3::from_array(n).as_dvec3()).normalize_or_zero().as_vec3()).collect::<Vec<_>>()
+    });
     let list: Vec<u32> = match reader.read_indices() {
         Some(indices) => indices.into_u32().collect(),
         None => (0..positions.len() as u32).collect(),
@@ -213,7 +213,7 @@ fn read_primitive(instance: &Instance, buffers: &[Vec<u8>], path: &Path) -> Resu
         _ => list,
     };
     // A mirroring transform flips the winding; keep triangles counter-clockwise.
-    if Mat3::from_mat4(m).determinant() < 0.0 {
+    if DMat3::from_mat4(m).determinant() < 0.0 {
         for tri in indices.chunks_exact_mut(3) {
             tri.swap(1, 2);
         }

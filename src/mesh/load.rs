@@ -23,8 +23,10 @@
 //! 5. [`SceneOptions::up`] turns a z-up file into the crate's y-up world and
 //!    [`SceneOptions::scale`] scales it;
 //! 6. what is left must have extent ([`SceneLoadError::AllVerticesCoincide`])
-//!    and triangles; optionally a floor ([`Role::Receiver`]) is put under it
-//!    so that the model's shadows have somewhere to fall.
+//!    and triangles; a model far from the origin for its size is moved to
+//!    it before anything is rounded to single precision
+//!    ([`Repair::Recentred`]); optionally a floor ([`Role::Receiver`]) is put
+//!    under it so that the model's shadows have somewhere to fall.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -148,7 +150,7 @@ pub enum SceneLoadError {
         /// Vertex index within the object.
         vertex: usize,
         /// The vertex as read.
-        position: Vec3,
+        position: DVec3,
     },
     /// A vertex lies too far from the origin.
     #[error("{path}: object {object:?}: vertex {vertex} at {position} has coordinates beyond {limit:e}; move the model nearer the origin or --scale it down")]
@@ -198,7 +200,8 @@ pub enum SceneLoadError {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct RawObject {
     pub name: String,
-    pub positions: Vec<Vec3>,
+    /// Positions as read, in double precision (OBJ text is parsed to f64).
+    pub positions: Vec<DVec3>,
     /// `None` when the file has none for this object.
     pub normals: Option<Vec<Vec3>>,
     pub indices: Vec<u32>,
@@ -212,7 +215,7 @@ pub(crate) struct RawScene {
 }
 
 /// A repair [`load_scene_file`] made.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum Repair {
     /// Polygons with more than three vertices, split into triangle fans.
@@ -250,6 +253,18 @@ pub enum Repair {
         /// Objects dropped.
         objects: usize,
     },
+    /// The model lay far from the origin for its size (its centre farther
+    /// than [`RECENTRE_BEYOND_DIAGONALS`] bounding diagonals): it was moved by `-offset` so that its
+    /// centre is the origin. The renderer and the meshes work in single
+    /// precision, whose step at a coordinate `c` is about `c * 6e-8`; a
+    /// one-metre model 1 km away already loses sub-pixel shadow detail, and
+    /// 100 km away whole shadows. Shadows do not depend on where the origin
+    /// is; `--eye` and `--target` are in the moved coordinates.
+    Recentred {
+        /// The model's centre in the file (after up axis and scale), now
+        /// the origin.
+        offset: DVec3,
+    },
 }
 
 impl fmt::Display for Repair {
@@ -264,6 +279,11 @@ impl fmt::Display for Repair {
             Self::DroppedUnreferenced { vertices } => write!(f, "dropped {vertices} unused vertices"),
             Self::ComputedNormals { objects } => write!(f, "computed normals for {objects} objects"),
             Self::DroppedEmptyObjects { objects } => write!(f, "dropped {objects} objects without triangles"),
+            Self::Recentred { offset } => write!(
+                f,
+                "moved by ({:.6}, {:.6}, {:.6}) to the origin for single precision (--eye/--target are in the moved coordinates)",
+                -offset.x, -offset.y, -offset.z
+            ),
         }
     }
 }
@@ -359,8 +379,9 @@ fn build_scene(raw: RawScene, path: &Path, options: &SceneOptions) -> Result<(Sc
     if read_triangles == 0 {
         return Err(SceneLoadError::NoTriangles { path: path.into() });
     }
-    let (mut degenerate, mut unreferenced, mut computed, mut empty) = (0, 0, 0, 0);
-    let mut objects = Vec::with_capacity(raw.objects.len());
+    // Every object's world positions and the bounds of what triangles use,
+    // before anything is rounded to single precision.
+    let mut placed = Vec::with_capacity(raw.objects.len());
     let mut all_bounds: Option<Aabb> = None;
     for object in raw.objects {
         let geometry = |source| SceneLoadError::Geometry { path: path.into(), object: object.name.clone(), source };
@@ -376,6 +397,19 @@ fn build_scene(raw: RawScene, path: &Path, options: &SceneOptions) -> Result<(Sc
             (Some(a), Some(b)) => Some(a.union(&b)),
             (a, b) => a.or(b),
         };
+        placed.push((object, positions));
+    }
+    let referenced = all_bounds.ok_or_else(|| SceneLoadError::NoTriangles { path: path.into() })?;
+    if coincident(&referenced) {
+        return Err(SceneLoadError::AllVerticesCoincide { path: path.into(), point: referenced.center() });
+    }
+    let offset = recentring_offset(&referenced);
+    let (mut degenerate, mut unreferenced, mut computed, mut empty) = (0, 0, 0, 0);
+    let mut objects = Vec::with_capacity(placed.len());
+    for (object, mut positions) in placed {
+        if let Some(offset) = offset {
+            positions.iter_mut().for_each(|p| *p -= offset);
+        }
         let (mesh, stats) = repaired_mesh(&object, &positions, options.up);
         degenerate += stats.degenerate;
         unreferenced += stats.unreferenced;
@@ -396,9 +430,8 @@ fn build_scene(raw: RawScene, path: &Path, options: &SceneOptions) -> Result<(Sc
             repairs.push(repair);
         }
     }
-    let referenced = all_bounds.ok_or_else(|| SceneLoadError::NoTriangles { path: path.into() })?;
-    if coincident(&referenced) {
-        return Err(SceneLoadError::AllVerticesCoincide { path: path.into(), point: referenced.center() });
+    if let Some(offset) = offset {
+        repairs.push(Repair::Recentred { offset });
     }
     if objects.is_empty() {
         return Err(SceneLoadError::AllDegenerate { path: path.into(), triangles: read_triangles });
@@ -414,6 +447,19 @@ fn build_scene(raw: RawScene, path: &Path, options: &SceneOptions) -> Result<(Sc
         repairs,
     };
     Ok((scene, report))
+}
+
+/// How far from the origin, in bounding diagonals, a model's centre may lie
+/// before it is moved there. Single precision then still resolves a
+/// 1/10⁵ of the model's size; a model a few sizes off the origin (the usual
+/// case) keeps the file's coordinates.
+pub const RECENTRE_BEYOND_DIAGONALS: f64 = 16.0;
+
+/// The model's centre when it lies farther from the origin than
+/// [`RECENTRE_BEYOND_DIAGONALS`] (see [`Repair::Recentred`]).
+fn recentring_offset(bounds: &Aabb) -> Option<DVec3> {
+    let center = bounds.center();
+    (center.length() > RECENTRE_BEYOND_DIAGONALS * bounds.diagonal()).then_some(center)
 }
 
 /// Whether every point of `bounds` is one point to single precision.
@@ -438,7 +484,7 @@ fn world_positions(object: &RawObject, path: &Path, options: &SceneOptions) -> R
                     position: p,
                 });
             }
-            let w = up_rotate(p.as_dvec3(), options.up) * options.scale;
+            let w = up_rotate(p, options.up) * options.scale;
             if w.abs().max_element() > MAX_COORDINATE {
                 return Err(SceneLoadError::CoordinateRange {
                     path: path.into(),

@@ -29,6 +29,7 @@ use glam::{Affine3A, Vec3};
 
 pub use load::{
     load_scene_file, LoadReport, Repair, SceneLoadError, SceneOptions, UpAxis, MAX_COORDINATE, MAX_TRIANGLES,
+    RECENTRE_BEYOND_DIAGONALS,
 };
 pub use masks::{Flicker, MaskAgreement, ShadowMasks};
 pub use obj::{load_obj, ObjError};

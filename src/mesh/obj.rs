@@ -4,7 +4,7 @@
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::load::{RawObject, RawScene, Repair};
 use super::{Mesh, MeshError, Role, Scene, SceneObject};
@@ -73,11 +73,11 @@ pub fn load_obj_reader(reader: &mut impl BufRead, path: impl AsRef<Path>) -> Res
     let mut objects = Vec::with_capacity(models.len());
     for model in models {
         let m = model.mesh;
-        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(Vec3::from_slice).collect();
+        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|p| DVec3::from_slice(p).as_vec3()).collect();
         let has_normals = m.normals.len() == m.positions.len();
         let mut mesh = Mesh {
             normals: if has_normals {
-                m.normals.chunks_exact(3).map(|n| Vec3::from_slice(n).normalize_or(Vec3::Y)).collect()
+                m.normals.chunks_exact(3).map(|n| DVec3::from_slice(n).as_vec3().normalize_or(Vec3::Y)).collect()
             } else {
                 vec![Vec3::Y; positions.len()]
             },
@@ -137,11 +137,12 @@ pub(crate) fn read_obj(text: &str, path: &Path) -> Result<RawScene, ObjError> {
         .into_iter()
         .map(|model| {
             let m = model.mesh;
-            let to_vec3 = |v: &[f32]| v.chunks_exact(3).map(Vec3::from_slice).collect::<Vec<_>>();
+            let normals = (m.normals.len() == m.positions.len())
+                .then(|| m.normals.chunks_exact(3).map(|n| DVec3::from_slice(n).as_vec3()).collect());
             RawObject {
                 name: model.name,
-                normals: (m.normals.len() == m.positions.len()).then(|| to_vec3(&m.normals)),
-                positions: to_vec3(&m.positions),
+                normals,
+                positions: m.positions.chunks_exact(3).map(DVec3::from_slice).collect(),
                 indices: m.indices,
             }
         })

@@ -15,7 +15,7 @@
 //!
 //! [`Renderer::capture_view`]: super::Renderer::capture_view
 
-use super::passes::{scene_pipeline, Target, COLOR_FORMAT, DEPTH_FORMAT, MASKS_FORMAT};
+use super::passes::{full_screen_pipeline, scene_pipeline, Target, COLOR_FORMAT, DEPTH_FORMAT, MASKS_FORMAT};
 use crate::Camera;
 
 /// Format of both capture targets (f32 bits in integer channels: R32Float
@@ -124,34 +124,15 @@ impl DeferredPipelines {
             &[capture_target.clone(), capture_target],
         );
         let full_screen = |label: &str, entry: &str, targets: &[Option<wgpu::ColorTargetState>]| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_fullscreen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                // Every covered pixel writes its captured depth.
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            // Every covered pixel writes its captured depth.
+            let depth = wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            };
+            full_screen_pipeline(device, label, &layout, module, ["vs_fullscreen", entry], targets, Some(depth))
         };
         let color_target = Some(wgpu::ColorTargetState::from(COLOR_FORMAT));
         let masks_target = Some(wgpu::ColorTargetState::from(MASKS_FORMAT));

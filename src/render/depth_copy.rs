@@ -12,7 +12,7 @@ use std::borrow::Cow;
 
 use wgpu::util::DeviceExt;
 
-use super::passes::Target;
+use super::passes::{full_screen_pipeline, Target};
 
 const SHADER: &str = r"
 @group(0) @binding(0) var depth: texture_2d_array<f32>;
@@ -75,27 +75,15 @@ impl DepthCopy {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lixel depth copy pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_copy"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState::from(BITS_FORMAT))],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = full_screen_pipeline(
+            device,
+            "lixel depth copy pipeline",
+            &pipeline_layout,
+            &module,
+            ["vs_fullscreen", "fs_copy"],
+            &[Some(wgpu::ColorTargetState::from(BITS_FORMAT))],
+            None,
+        );
         Self { layout, pipeline }
     }
 

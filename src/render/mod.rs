@@ -45,7 +45,7 @@ mod frame_loop;
 mod lookup;
 mod options;
 mod output;
-mod passes;
+pub(crate) mod passes;
 pub mod readback;
 pub mod sgsm;
 pub mod spsm;

@@ -123,6 +123,42 @@ pub(crate) fn scene_pipeline(
     })
 }
 
+/// A pipeline drawing one full-screen triangle without vertex buffers
+/// (`entries`: the vertex and fragment entry points of `module`, e.g.
+/// `vs_fullscreen` in common.wgsl), writing `targets` and, with
+/// `depth_stencil`, a depth target.
+pub(crate) fn full_screen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    [vertex, fragment]: [&str; 2],
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth_stencil: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fragment),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// The camera pass: colour only, or colour and the full-resolution masks;
 /// the view-capture pipelines of the same shader on first use.
 pub(crate) struct CameraPass {
@@ -199,27 +235,15 @@ impl AnalysisPass {
     ) -> Self {
         let layout = pipeline_layout(device, "lixel analysis pipeline layout", scene, maps);
         let masks_target = Some(wgpu::ColorTargetState::from(MASKS_FORMAT));
-        let depth = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lixel analysis pipeline (camera depth)"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some("fs_analysis_depth"),
-                compilation_options: Default::default(),
-                targets: std::slice::from_ref(&masks_target),
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let depth = full_screen_pipeline(
+            device,
+            "lixel analysis pipeline (camera depth)",
+            &layout,
+            module,
+            ["vs_fullscreen", "fs_analysis_depth"],
+            std::slice::from_ref(&masks_target),
+            None,
+        );
         Self {
             geometry: scene_pipeline(
                 device,

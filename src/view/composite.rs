@@ -8,6 +8,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
+use crate::render::passes::full_screen_pipeline;
 use crate::render::RenderError;
 
 /// Format of the uploaded pictures (error, shadow map, HUD) and of the
@@ -131,27 +132,15 @@ impl Composite {
                 label: Some("lixel view composite shader"),
                 source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/view_composite.wgsl").into()),
             });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("lixel view composite pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_composite"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_composite"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState::from(format))],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+            let pipeline = full_screen_pipeline(
+                device,
+                "lixel view composite pipeline",
+                &pipeline_layout,
+                &module,
+                ["vs_composite", "fs_composite"],
+                &[Some(wgpu::ColorTargetState::from(format))],
+                None,
+            );
             let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("lixel view composite uniforms"),
                 size: std::mem::size_of::<CompositeRaw>() as u64,
