@@ -610,7 +610,7 @@ impl CentreDepths {
         // Beyond the device's limits a 256-byte buffer stands in: the pass
         // writes nothing into it (a map has more texels) and the lookup sees
         // it too small and keeps SPSM's own verdicts (spsm_standard).
-        let fits = wanted <= u64::from(limits.max_storage_buffer_binding_size) && wanted <= limits.max_buffer_size;
+        let fits = wanted <= limits.max_storage_buffer_binding_size && wanted <= limits.max_buffer_size;
         let (size, stride) = if fits { (wanted, stride) } else { (256, 0) };
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lixel spsm centre depths"),
