@@ -38,7 +38,7 @@
 //!
 //! ## Features
 //! `render` (default) adds the wgpu renderer and its frame loop
-//! ([`render::ShadowLoop`]); without it the crate is the solver alone (glam,
+//! (`render::ShadowLoop`); without it the crate is the solver alone (glam,
 //! thiserror, robust, argmin). `cli` (default) adds the `lixel` binary and
 //! the experiment harness behind it (`lixel::experiment`, with clap and
 //! indicatif); an engine needs only `render`.

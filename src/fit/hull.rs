@@ -99,19 +99,33 @@ fn discard_interior(points: &mut Vec<DVec2>) {
     if n < 3 {
         return;
     }
-    let mut edges = [(DVec2::ZERO, DVec2::ZERO); 8];
-    for (i, edge) in edges[..n].iter_mut().enumerate() {
-        *edge = (corners[i], corners[(i + 1) % n]);
+    // Each edge `a → b` as the line `dx·y − dy·x − c` (positive inside),
+    // with a margin above its rounding error: every term is at most
+    // `(|dx| + |dy|)·scale`, and the few roundings of the test, of `c` and
+    // of `b − a` each err by an `f64::EPSILON` of that, so `1e-12` of it is
+    // thousands of times the error. Points are far from the origin compared
+    // with their spread only when the spread is tiny; then fewer are
+    // dropped, never a vertex.
+    let scale = points.iter().fold(0.0_f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+    let mut lines = [(0.0, 0.0, 0.0, 0.0); 8];
+    for (i, line) in lines[..n].iter_mut().enumerate() {
+        let (a, b) = (corners[i], corners[(i + 1) % n]);
+        let d = b - a;
+        *line = (d.x, d.y, d.x * a.y - d.y * a.x, 1e-12 * (d.x.abs() + d.y.abs()) * scale);
     }
-    let edges = &edges[..n];
-    let strictly_inside = |p: &DVec2| {
-        edges.iter().all(|&(a, b)| {
-            let (ab, ap) = (b - a, *p - a);
-            let cross = ab.x * ap.y - ab.y * ap.x;
-            cross > 1e-12 * (ab.x.abs() + ab.y.abs()) * (ap.x.abs() + ap.y.abs())
-        })
-    };
-    points.retain(|p| !strictly_inside(p));
+    let lines = &lines[..n];
+    let strictly_inside = |p: DVec2| lines.iter().all(|&(dx, dy, c, margin)| dx * p.y - dy * p.x - c > margin);
+    // `retain` by hand (same order): the closure call per point was a
+    // visible part of the pass.
+    let mut kept = 0;
+    for i in 0..points.len() {
+        let p = points[i];
+        if !strictly_inside(p) {
+            points[kept] = p;
+            kept += 1;
+        }
+    }
+    points.truncate(kept);
 }
 
 /// Allocation-free form of [`convex_hull_2d`].
@@ -197,14 +211,33 @@ mod tests {
         for case in 0..200 {
             let n = 65 + case * 37;
             let points: Vec<DVec2> = (0..n)
-                .map(|k| match case % 4 {
+                .map(|k| match case % 7 {
                     0 => v(next(), next()),
                     1 => {
                         let a = next() * std::f64::consts::TAU;
                         v(a.cos(), a.sin()) * if k % 3 == 0 { 1.0 } else { next() }
                     }
                     2 => v((next() * 20.0).floor(), (next() * 20.0).floor()),
-                    _ => v(next() * 1e6, next() * 1e-6),
+                    3 => v(next() * 1e6, next() * 1e-6),
+                    // Far from the origin for their spread: the margin
+                    // scales with the coordinates.
+                    4 => v(1e7 + next(), -3e6 + next() * 1e-3),
+                    // On the circle and an ulp or two inside it.
+                    5 => {
+                        let a = next() * std::f64::consts::TAU;
+                        v(a.cos(), a.sin()) * (1.0 - f64::EPSILON * (k % 3) as f64)
+                    }
+                    // Along a square's edges, a hair outside or inside
+                    // (near-hull points right at the thinning octagon's edges).
+                    _ => {
+                        let (t, hair) = (next(), (next() - 0.5) * 1e-13);
+                        match k % 4 {
+                            0 => v(t, -hair),
+                            1 => v(1.0 + hair, t),
+                            2 => v(t, 1.0 + hair),
+                            _ => v(-hair, t),
+                        }
+                    }
                 })
                 .collect();
             let mut plain = points.clone();

@@ -33,8 +33,9 @@ pub struct ClipWorkspace {
     pub(super) silhouette: Vec<(usize, usize, usize, usize)>,
     /// The second body of a chain of clips (swapped with the result).
     pub(super) spare: ConvexPolyhedron,
-    /// Tests only: find the cap's boundary by looking up every edge's
-    /// reverse in all faces (the reference the fast path must equal).
+    /// Tests only: the general path (the cap's boundary by looking up every
+    /// edge's reverse in all faces, the general walk, the renumbering pass),
+    /// the reference the fast paths must equal.
     #[cfg(test)]
     pub(super) reference_boundary: bool,
 }
@@ -76,6 +77,15 @@ impl ConvexPolyhedron {
     /// The clip of [`clip`](Self::clip) (see there for the algorithm) into
     /// `out`; returns `false`, leaving `out` untouched, when the result is
     /// `self` unchanged.
+    ///
+    /// The common cut (no vertex within `eps` of the plane) takes a shorter
+    /// road to the same result: the cap's edges are noted while the faces
+    /// are cut (consecutive cut points of a face), its loop is traced
+    /// directly when the boundary is one simple cycle, and the search for
+    /// unused vertices is skipped (every kept vertex is then in a kept
+    /// face). The arithmetic is the same, so the body is the same bit for
+    /// bit (`cap_boundary_fast_path_equals_reference` compares it with the
+    /// general path).
     pub(super) fn clip_core(&self, plane: &Plane, eps: f64, out: &mut Self, workspace: &mut ClipWorkspace) -> bool {
         if self.is_empty() || !plane.is_finite() {
             out.clear();
@@ -84,36 +94,58 @@ impl ConvexPolyhedron {
         let eps = eps.max(0.0);
         #[cfg(test)]
         let reference = workspace.reference_boundary;
+        #[cfg(not(test))]
+        let reference = false;
         let ClipWorkspace { dist, side, new_index, cuts, on_plane, edges, walker, .. } = workspace;
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
         side.clear();
-        side.extend(dist.iter().map(|&d| Side::of(d, eps)));
-        if !side.contains(&Side::Outside) {
+        // How many vertices lie inside, on and outside the plane.
+        let mut count = [0usize; 3];
+        side.extend(dist.iter().map(|&d| {
+            let s = Side::of(d, eps);
+            count[s as usize] += 1;
+            s
+        }));
+        if count[Side::Outside as usize] == 0 {
             return false;
         }
         out.clear();
-        if !side.contains(&Side::Inside) {
+        if count[Side::Inside as usize] == 0 {
             return true;
         }
+        // With no vertex on the plane, the plane edges are exactly the
+        // consecutive cut points of each cut face (noted below).
+        let simple = !reference && count[Side::On as usize] == 0;
 
         // Kept vertices first, under their new indices; cut points follow.
         let Self { vertices, faces, indices } = out;
         new_index.clear();
         new_index.resize(self.vertices.len(), usize::MAX);
+        on_plane.clear();
         for (i, &v) in self.vertices.iter().enumerate() {
             if side[i] != Side::Outside {
                 new_index[i] = vertices.len();
                 vertices.push(v);
+                on_plane.push(side[i] == Side::On);
             }
         }
         cuts.clear();
+        let along = &mut walker.targets;
+        along.clear();
+        let mut dropped_inside = false;
         for face in &self.faces {
             let start = indices.len();
+            let along_start = along.len();
             let loop_indices = &self.indices[face.start..face.end];
+            let mut keeps_inside = false;
+            // The last cut pushed, if it is the last index pushed.
+            let mut last_cut = usize::MAX;
             for (a, b) in loop_edges(loop_indices) {
                 if side[a] != Side::Outside {
+                    keeps_inside |= side[a] == Side::Inside;
                     indices.push(new_index[a]);
+                    last_cut = usize::MAX;
                 }
                 if side[a].is_opposite(side[b]) {
                     let key = (a.min(b), a.max(b));
@@ -127,27 +159,39 @@ impl ConvexPolyhedron {
                             vertices.len() - 1
                         }
                     };
+                    if simple && last_cut != usize::MAX {
+                        along.extend([last_cut, cut]);
+                    }
                     indices.push(cut);
+                    last_cut = cut;
                 }
             }
             // A face with nothing strictly inside lies in the cap (to within
             // eps): the cap replaces it.
-            let keeps_inside = loop_indices.iter().any(|&i| side[i] == Side::Inside);
             if keeps_inside && indices.len() - start >= 3 {
+                if simple && last_cut != usize::MAX && is_cut(on_plane, vertices.len(), indices[start]) {
+                    // The loop's closing edge runs from the last cut to the
+                    // first index, itself a cut: it comes last, as in a scan
+                    // of the face's edges.
+                    along.extend([last_cut, indices[start]]);
+                }
                 faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
             } else {
+                dropped_inside |= keeps_inside;
+                // Its plane edges must not count.
+                along.truncate(along_start);
                 indices.truncate(start);
             }
         }
 
         // The new vertices on the plane: kept ones within eps of it, then
         // every cut point.
-        on_plane.clear();
-        on_plane.extend(
-            self.vertices.iter().zip(side.iter()).filter(|&(_, &s)| s != Side::Outside).map(|(_, &s)| s == Side::On),
-        );
         on_plane.resize(vertices.len(), true);
-        walker.collect_cap_boundary(faces, indices, on_plane);
+        if simple {
+            walker.boundary_from_along();
+        } else {
+            walker.collect_cap_boundary(faces, indices, on_plane);
+        }
         #[cfg(test)]
         if reference {
             half_edge_faces(edges, faces, indices);
@@ -155,14 +199,33 @@ impl ConvexPolyhedron {
         }
         #[cfg(not(test))]
         let _ = edges;
-        walker.walk(vertices.len(), |cycle| {
+        let cap = |cycle: &[usize]| {
             let start = indices.len();
             indices.extend_from_slice(cycle);
             faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
-        });
-        out.finish_parts(new_index);
+        };
+        if reference || !walker.trace_simple(cap) {
+            walker.walk(vertices.len(), |cycle| {
+                let start = indices.len();
+                indices.extend_from_slice(cycle);
+                faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
+            });
+        }
+        if simple && !dropped_inside {
+            // Every kept vertex is in a kept face (it is strictly inside) and
+            // so is every cut point: nothing to renumber.
+            let _ = out.finish_checks();
+        } else {
+            out.finish_parts(new_index);
+        }
         true
     }
+}
+
+/// Whether new vertex `i` (of `vertex_count` so far) is a cut point: while
+/// the faces are cut, `on_plane` covers the kept vertices only.
+fn is_cut(on_plane: &[bool], vertex_count: usize, i: usize) -> bool {
+    i >= on_plane.len() && i < vertex_count
 }
 
 /// The directed edges `(from, to)` of a face loop, in order.
@@ -312,7 +375,7 @@ impl LoopWalker {
     /// which finds exactly the edges (and the order) a lookup of every edge's
     /// reverse in all faces would.
     pub(super) fn collect_cap_boundary(&mut self, faces: &[FaceSpan], indices: &[usize], on_plane: &[bool]) {
-        let Self { boundary, targets: along, .. } = self;
+        let along = &mut self.targets;
         // `along` holds the plane edges as pairs `a, b`, flattened.
         along.clear();
         for face in faces {
@@ -322,6 +385,13 @@ impl LoopWalker {
                 }
             }
         }
+        self.boundary_from_along();
+    }
+
+    /// The boundary edges among the plane edges held flattened in
+    /// `targets`: those whose reverse is not there, reversed, in order.
+    pub(super) fn boundary_from_along(&mut self) {
+        let Self { boundary, targets: along, .. } = self;
         boundary.clear();
         for edge in along.chunks_exact(2) {
             let (a, b) = (edge[0], edge[1]);
@@ -329,6 +399,50 @@ impl LoopWalker {
                 boundary.push((b, a));
             }
         }
+    }
+
+    /// [`walk`](Self::walk) for the common boundary, one simple cycle in
+    /// which every vertex has one edge out: hands `emit` the loop the walk
+    /// would (from the first edge's start on) and returns `true`. Returns
+    /// `false`, emitting nothing, for any other boundary (the caller then
+    /// walks it).
+    pub(super) fn trace_simple(&mut self, mut emit: impl FnMut(&[usize])) -> bool {
+        let Self { boundary, path, .. } = self;
+        let k = boundary.len();
+        if k == 0 {
+            return true;
+        }
+        // The searches below are quadratic: long boundaries take the walk.
+        if k > 32 {
+            return false;
+        }
+        for i in 1..k {
+            let from = boundary[i].0;
+            if boundary[..i].iter().any(|e| e.0 == from) {
+                return false;
+            }
+        }
+        path.clear();
+        let start = boundary[0].0;
+        let mut v = start;
+        loop {
+            path.push(v);
+            let Some(&(_, w)) = boundary.iter().find(|e| e.0 == v) else {
+                return false;
+            };
+            if w == start {
+                break;
+            }
+            if path.len() == k {
+                return false;
+            }
+            v = w;
+        }
+        if path.len() != k {
+            return false;
+        }
+        emit(path);
+        true
     }
 
     /// Splits the collected boundary (over vertices `0..vertex_count`) into

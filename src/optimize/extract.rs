@@ -222,14 +222,27 @@ impl Classes {
         }
         self.one = false;
         self.class64.clear();
-        self.class64.extend(pixels.map(|(&d, &b)| {
-            if !valid(d) {
-                return 0;
-            }
-            bits.iter()
-                .enumerate()
-                .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
-        }));
+        if bits.iter().enumerate().all(|(k, &bit)| bit as usize == k) {
+            // Slot `k` is bit `k` (what every caller passes): the classes
+            // are the masked bits and their complement, without a loop.
+            let mask = if bits.len() >= 32 { u32::MAX } else { (1u32 << bits.len()) - 1 };
+            self.class64.extend(pixels.map(|(&d, &b)| {
+                if valid(d) {
+                    u64::from(b & mask) | u64::from(!b & mask) << 32
+                } else {
+                    0
+                }
+            }));
+        } else {
+            self.class64.extend(pixels.map(|(&d, &b)| {
+                if !valid(d) {
+                    return 0;
+                }
+                bits.iter()
+                    .enumerate()
+                    .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
+            }));
+        }
         or_3x3(&self.class64, w, h, &mut self.tmp64, &mut self.near64);
     }
 
@@ -274,7 +287,20 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             v
         }
     };
+    // Each light's `X~ = T [x; w]` rows, made once rather than per pixel
+    // (`LightFrame::homogeneous4` rebuilds them on every call).
+    let mut rows = [[DVec4::ZERO; 3]; 32];
+    for (rows, samples) in rows.iter_mut().zip(all.iter()) {
+        *rows = samples.frame.light_from_world_3x4_rows();
+    }
+    let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
     classes.fill(grid, bits);
+    // Slots beyond `all` (none from the callers) are ignored.
+    let slots = if all.len() >= 32 { u32::MAX } else { (1u32 << all.len()) - 1 };
+    // Counted here and added at the end: the counts are the same, without
+    // a loop over every light at every pixel.
+    let mut covered = 0usize;
+    let mut shadowed = [0usize; 32];
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
@@ -282,9 +308,10 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 continue;
             }
             let (shadowed_bits, mixed_bits) = classes.at(i);
-            for (bit, samples) in all.iter_mut().enumerate() {
-                samples.counts.covered += 1;
-                samples.counts.shadowed += (shadowed_bits >> bit & 1) as usize;
+            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+            covered += 1;
+            for bit in set_bits(shadowed_bits) {
+                shadowed[bit] += 1;
             }
             let active = shadowed_bits | mixed_bits;
             if active == 0 {
@@ -295,20 +322,19 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let here = unproject(sx, sy, d);
             if !(here.w > 0.0) || !here.is_finite() {
-                for (bit, samples) in all.iter_mut().enumerate() {
-                    samples.counts.rejected_invalid += (active >> bit & 1) as usize;
+                for bit in set_bits(active) {
+                    all[bit].counts.rejected_invalid += 1;
                 }
                 continue;
             }
             let world = here.truncate() / here.w;
             // Light-independent surface derivatives, computed on first use.
             let mut surface: Option<Option<Surface>> = None;
-            for (bit, samples) in all.iter_mut().enumerate() {
-                if active >> bit & 1 == 0 {
-                    continue;
-                }
+            for bit in set_bits(active) {
+                let samples = &mut all[bit];
                 let frame = samples.frame;
-                let x_light = frame.homogeneous4(here);
+                let rows = &rows[bit];
+                let x_light = to_light(rows, here);
                 samples.relevant.push(x_light);
                 samples.relevant_world.push(world);
                 samples.depth_points.push(world);
@@ -336,11 +362,11 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 };
                 let sample = match found {
                     Surface::Given { tx, ty, .. } => {
-                        let along = |t: DVec3| frame.homogeneous4(t.extend(0.0));
+                        let along = |t: DVec3| to_light(rows, t.extend(0.0));
                         BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
                     }
                     Surface::Depth { dx4, dy4, .. } => {
-                        BoundarySample { light: x_light, d_dx: frame.homogeneous4(dx4), d_dy: frame.homogeneous4(dy4) }
+                        BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
                     }
                 };
                 if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
@@ -352,6 +378,21 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             }
         }
     }
+    for (samples, &shadowed) in all.iter_mut().zip(&shadowed) {
+        samples.counts.covered += covered;
+        samples.counts.shadowed += shadowed;
+    }
+}
+
+/// The indices of the bits set in `mask`, lowest first.
+fn set_bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let bit = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            bit
+        })
+    })
 }
 
 /// A boundary pixel's surface: world tangents from a read-back normal, or

@@ -539,6 +539,16 @@ impl Optimizer {
     /// Fits `axis` to the samples and scores it; `None` if a relevant sample
     /// is not in front of the light.
     pub(crate) fn candidate(&mut self, samples: &Samples, axis: DVec3) -> Option<Candidate> {
+        // Below `+∞` is exactly "finite" (NaN is below nothing).
+        self.candidate_below(samples, axis, f64::INFINITY)
+    }
+
+    /// [`candidate`](Self::candidate) when its objective is below `bound`
+    /// (else `None`), its sum stopped once it reaches `bound`
+    /// ([`objective::objective_below`]): the same decision as comparing a
+    /// full candidate's objective with `bound`, for less work on the
+    /// candidates that lose.
+    pub(crate) fn candidate_below(&mut self, samples: &Samples, axis: DVec3, bound: f64) -> Option<Candidate> {
         let fit = self.fit_options(samples);
         let setup = AxisFit {
             frame: &samples.frame,
@@ -548,7 +558,7 @@ impl Optimizer {
         };
         let homography = fit_homography(&setup, axis, &self.extreme, &mut self.fit, &mut self.projected)?;
         let texel = objective::texel_homography(&homography, samples.problem.map_size());
-        let value = objective::objective(&texel, &samples.boundary);
+        let value = objective::objective_below(&texel, &samples.boundary, bound)?;
         value.is_finite().then_some(Candidate { axis: homography.row(2), homography, objective: value })
     }
 

@@ -41,10 +41,11 @@ pub(super) fn paper(
             let degrees = optimizer.options.angles_degrees[k];
             report.angles_tried.push(degrees);
             let turned = DQuat::from_axis_angle(rotation_axis, degrees.to_radians()) * j;
-            if let Some(candidate) = optimizer.candidate(samples, turned) {
-                if candidate.objective < improved.map_or(best.objective, |c| c.objective) {
-                    improved = Some(candidate);
-                }
+            // Only a candidate below the best so far counts: its sum stops
+            // once it is not (the same choice, see `candidate_below`).
+            let bound = improved.map_or(best.objective, |c| c.objective);
+            if let Some(candidate) = optimizer.candidate_below(samples, turned, bound) {
+                improved = Some(candidate);
             }
         }
         match improved {
