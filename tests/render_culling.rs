@@ -1,14 +1,17 @@
 //! Per-object culling leaves the output unchanged: the same shadow maps,
 //! camera image and masks as drawing every object, for every classical
 //! method (PSM's inverted and unclipped lights included), while it does
-//! leave objects out.
+//! leave objects out. Likewise keeping a layer's map for a later frame
+//! (`RendererOptions::reuse_maps`), and drawing several lights in one frame
+//! (each light's bits are those of its own frame; the experiment's shared
+//! frame relies on it).
 
 #![cfg(feature = "render")]
 
 mod render_common;
 
 use glam::{DVec3, UVec2};
-use lixel::render::{Frame, Renderer, RendererOptions};
+use lixel::render::{AnalysisRequest, Frame, Renderer, RendererOptions, ShadowLookup, SpsmOptions};
 use lixel::{Camera, Light, Parameterization, ShadowMapSize, ShadowProblem};
 use render_common::*;
 
@@ -72,4 +75,126 @@ fn culling_changes_nothing_but_the_work() {
     assert!(compared >= 16, "most configurations solve: {compared}");
     assert!(saved_shadow, "some shadow pass left objects out");
     assert!(saved_camera, "the camera pass left objects out");
+}
+
+#[test]
+fn reused_maps_give_the_frames_of_drawn_maps() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(96);
+    let focused = matrices(&scene, &camera, &test_lights(), 192, &Parameterization::Focused);
+    let lispsm = matrices(&scene, &camera, &test_lights(), 160, &Parameterization::LiSpsm(Default::default()));
+    let (a, b, c) = (focused[0], focused[1], lispsm[0]);
+    let options = RendererOptions { analysis_size: (32, 32), timestamps: false, ..Default::default() };
+    let mut drawn = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let mut kept = Renderer::new(&device, &queue, &scene, RendererOptions { reuse_maps: true, ..options }).unwrap();
+    let spsm = ShadowLookup::Spsm(SpsmOptions::default());
+    // (lights, lookup, analysis, maps expected kept)
+    let frames: Vec<(Vec<_>, ShadowLookup, bool, u32)> = vec![
+        (vec![a], ShadowLookup::DepthCompare, false, 0),
+        (vec![a], ShadowLookup::DepthCompare, false, 1),
+        (vec![b, a], ShadowLookup::DepthCompare, false, 0),
+        (vec![b, a], ShadowLookup::DepthCompare, true, 2),
+        (vec![b, c], ShadowLookup::DepthCompare, false, 1),
+        // Another lookup's maps: their own layers and records.
+        (vec![b, c], spsm, false, 0),
+        (vec![b, c], spsm, false, 2),
+        // A third layer: new maps, nothing kept.
+        (vec![b, c, a], ShadowLookup::DepthCompare, false, 0),
+        (vec![b, c, a], ShadowLookup::DepthCompare, false, 3),
+        (vec![c], ShadowLookup::DepthCompare, false, 0),
+    ];
+    for (k, (lights, lookup, analysis, expected)) in frames.iter().enumerate() {
+        let frame = Frame {
+            camera: &camera,
+            lights,
+            masks: true,
+            analysis: analysis.then(AnalysisRequest::default),
+            lookup: *lookup,
+        };
+        let d = drawn.render(&frame).unwrap();
+        let r = kept.render(&frame).unwrap();
+        assert_eq!(d.maps_reused, 0, "frame {k}");
+        assert_eq!(r.maps_reused, *expected, "frame {k}");
+        assert_eq!(r.shadow_passes + r.maps_reused, d.shadow_passes, "frame {k}");
+        assert_eq!(kept.read_masks().unwrap(), drawn.read_masks().unwrap(), "frame {k}");
+        assert_eq!(kept.read_color().unwrap(), drawn.read_color().unwrap(), "frame {k}");
+        for light in 0..lights.len() {
+            let (x, y) = (kept.read_shadow_map(light).unwrap(), drawn.read_shadow_map(light).unwrap());
+            assert!(x.depth == y.depth, "frame {k} light {light}: maps differ");
+        }
+        if *analysis {
+            drawn.wait_idle().unwrap();
+            kept.wait_idle().unwrap();
+            let (x, y) = (kept.try_take_analysis().unwrap(), drawn.try_take_analysis().unwrap());
+            assert_eq!(x.masks, y.masks, "frame {k}: analysis readbacks differ");
+        }
+    }
+    // A timed frame draws every pass.
+    let mut timed =
+        Renderer::new(&device, &queue, &scene, RendererOptions { reuse_maps: true, ..Default::default() }).unwrap();
+    let frame = Frame { camera: &camera, lights: &focused, masks: true, analysis: None, lookup: Default::default() };
+    timed.render(&frame).unwrap();
+    let again = timed.render(&frame).unwrap();
+    assert_eq!(again.maps_reused, u32::from(!timed.timestamps_enabled()) * 2);
+}
+
+#[test]
+fn each_light_of_a_frame_gets_the_bits_of_its_own_frame() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(64);
+    let mut matrices = Vec::new();
+    for p in [Parameterization::Focused, Parameterization::Normal, Parameterization::LiSpsm(Default::default())] {
+        matrices.extend(lixel_matrices(&scene, &camera, &p));
+    }
+    assert!(matrices.len() >= 6);
+    let options = RendererOptions { timestamps: false, ..Default::default() };
+    let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let own: Vec<_> = matrices
+        .iter()
+        .map(|m| {
+            let frame = Frame {
+                camera: &camera,
+                lights: std::slice::from_ref(m),
+                masks: true,
+                analysis: None,
+                lookup: Default::default(),
+            };
+            renderer.render(&frame).unwrap();
+            renderer.read_masks().unwrap()
+        })
+        .collect();
+    // Every count of layers up to seven (six is a cube map on GL if unguarded).
+    for n in 2..=matrices.len().min(7) {
+        let frame =
+            Frame { camera: &camera, lights: &matrices[..n], masks: true, analysis: None, lookup: Default::default() };
+        renderer.render(&frame).unwrap();
+        let shared = renderer.read_masks().unwrap();
+        for (bit, single) in own[..n].iter().enumerate() {
+            assert_eq!(shared.depth, single.depth, "{n} lights");
+            let differing = (0..single.shadow.len())
+                .filter(|&i| {
+                    shared.shadow[i] >> bit & 1 != single.shadow[i] & 1
+                        || shared.facing[i] >> bit & 1 != single.facing[i] & 1
+                })
+                .count();
+            assert_eq!(differing, 0, "{n} lights: light {bit}'s bits differ from its own frame's");
+        }
+    }
+}
+
+/// A matrix per test light (directional and point) and per lookup-free method.
+fn lixel_matrices(scene: &lixel::mesh::Scene, camera: &Camera, p: &Parameterization) -> Vec<lixel::LightMatrix> {
+    let lights = [
+        Light::directional(DVec3::new(0.6, -1.0, 0.35)),
+        Light::point(DVec3::new(-8.0, 30.0, 12.0)),
+        Light::point(DVec3::new(6.0, 18.0, -9.0)),
+    ];
+    lights
+        .iter()
+        .filter_map(|&l| {
+            ShadowProblem::new(*camera, l, scene.bounds(), ShadowMapSize::square(128)).and_then(|q| q.solve(p)).ok()
+        })
+        .collect()
 }

@@ -102,6 +102,9 @@ fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equ
         .map(|&size| (MethodSpec::FOCUSED, size))
         .chain(OPTIMIZED_SIZES.iter().map(|&size| (MethodSpec::OPTIMIZED, size)))
         .collect();
+    // The ladder's maps (up to 4000²) need one layer, not the shared
+    // frame's one per method.
+    runner.renderer.release_maps();
     let means = runner.means_at_resolutions(&runs, count)?;
     let (focused, optimized) = means.split_at(config.equivalence_ladder.len());
     let ladder: Vec<(u32, f64)> = config.equivalence_ladder.iter().copied().zip(focused.iter().copied()).collect();

@@ -8,11 +8,12 @@ use std::collections::BTreeSet;
 
 use super::{ExperimentConfig, ExperimentError, SceneSource, Truth};
 
-/// Host bytes per screen pixel while a configuration runs: the ray-cast
-/// truth (traced pixels and masks, 24 B), the focused truth and one
-/// method's masks (12 B each), the colour read-back for pictures (4 B),
-/// rounded up for the render targets' staging copies.
-pub(super) const BYTES_PER_PIXEL: u64 = 64;
+/// Host bytes per screen pixel while a configuration runs: the camera's
+/// primary rays kept for the whole run (44 B), the ray-cast truth (traced
+/// pixels and masks, 20 B), the focused truth and one method's masks
+/// (12 B each), the colour read-back for pictures (4 B), rounded up for the
+/// render targets' staging copies.
+pub(super) const BYTES_PER_PIXEL: u64 = 104;
 
 /// Host bytes per triangle of the built-in scene: the mesh (positions,
 /// normals, indices), its merged copy and BVH for ray casting, and the

@@ -15,6 +15,7 @@
 //!    truth. One bias policy ([`ShadowBias`]'s
 //!    default) serves every method.
 
+mod batch;
 mod cascades;
 mod coverage;
 mod finish;
@@ -38,7 +39,7 @@ use std::time::{Duration, Instant};
 
 use glam::{DVec3, UVec2};
 
-use crate::mesh::{LoadReport, RayCaster, Scene, SceneOptions, ShadowMasks};
+use crate::mesh::{LoadReport, PrimaryView, RayCaster, Scene, SceneOptions, ShadowMasks};
 use crate::optimize::{OptimizeOptions, SearchStrategy};
 use crate::render::subpixel::AaSamples;
 use crate::render::{
@@ -516,6 +517,13 @@ pub struct MethodResult {
     pub note: String,
 }
 
+impl MethodResult {
+    /// A place holder until the method's shared frame is read (`batch.rs`).
+    fn pending() -> Self {
+        Self { matrix: None, cascades: Vec::new(), counts: None, visibility: None, frames: 0, note: String::new() }
+    }
+}
+
 /// Misclassification counts of one method on one configuration.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
@@ -559,6 +567,9 @@ pub struct Runner<'a> {
     scene: Scene,
     camera: Camera,
     caster: Option<RayCaster>,
+    /// The camera's primary rays at the screen size, traced on the first
+    /// truth and shared by every light (the camera never changes).
+    primary: Option<PrimaryView>,
     renderer: Renderer,
     stages: RunStages,
 }
@@ -610,7 +621,7 @@ impl<'a> Runner<'a> {
         // Every configuration and method sees the scene through this one
         // camera: draw it once, shade the capture per method (same masks).
         renderer.capture_view(&camera)?;
-        Ok(Self { config, scene, camera, caster, renderer, stages: RunStages::default() })
+        Ok(Self { config, scene, camera, caster, primary: None, renderer, stages: RunStages::default() })
     }
 
     /// The camera.
@@ -694,7 +705,13 @@ impl<'a> Runner<'a> {
     /// Renderer failures.
     pub fn truths(&mut self, light: Light) -> Result<(Option<ShadowMasks>, Option<ShadowMasks>), ExperimentError> {
         let size = self.config.screen;
-        let ray = self.caster.as_ref().map(|c| c.trace_masks(&self.camera, &[light], size, size));
+        let ray = match &self.caster {
+            Some(caster) => {
+                let view = self.primary.get_or_insert_with(|| caster.primary_view(&self.camera, size, size));
+                Some(caster.trace_masks_from(view, &[light]))
+            }
+            None => None,
+        };
         let focused = if matches!(self.config.truth, Truth::Focused4000 | Truth::Both) {
             let m = self.problem(light, 4000)?.solve(&Parameterization::Focused)?;
             Some(self.masks(&m)?)
@@ -813,51 +830,31 @@ impl<'a> Runner<'a> {
         let truth = ray.or(focused_truth).ok_or_else(|| ExperimentError::Config("no ground truth".into()))?;
         // What a depth readback supplies to PSM: the nearest visible depth.
         let nearest = nearest_view_depth(&self.camera, &truth);
-        let mut results = Vec::new();
+        let mut results = Vec::with_capacity(self.config.methods.len());
+        // Methods whose masks come from a frame shared with others (`batch.rs`).
+        let mut shared = Vec::new();
         for &method in &self.config.methods {
+            // A method solved through frames of its own: the shared frame
+            // goes first, the loop's first (focused) map in its layer 0.
+            if method.parameterization(nearest).is_none() && !shared.is_empty() {
+                let focused = shared.iter().position(|p: &batch::Pending| p.method.matrix() == crate::Method::Focused);
+                let pending = std::mem::take(&mut shared);
+                lap = self.finish_shared(pending, focused, &mut results, &truth, coverage.as_ref(), lap)?;
+            }
             let solved = self.solve_method(method, light, self.config.single_map(), nearest);
             lap = self.stages.lap(RunStage::Matrices, lap);
             let result = match solved {
+                Ok((matrices, frames, note)) if batch::shares_frame(method) => {
+                    shared.push(batch::Pending { index: results.len(), method, matrices, frames, note });
+                    MethodResult::pending()
+                }
                 Ok((matrices, frames, note)) => {
                     let masks = self.method_masks_of(method, &matrices)?;
                     lap = self.stages.lap(RunStage::Lookups, lap);
-                    // `+aaN`: the renderer's occlusion words against the truth
-                    // of the same N sub-samples; others: the shadow bit.
-                    let visibility = match (coverage.as_ref(), samples, method.lookup()) {
-                        (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
-                            Some(VisibilityError::of_occlusion(&self.occlusion(matrices.len())?, &truth, c, n))
-                        }
-                        (Some(c), Some(_), ShadowLookup::Supersampled(n)) => Some(VisibilityError::of_supersampled(
-                            &self.supersampled(matrices.len())?,
-                            &masks,
-                            &truth,
-                            c,
-                            n,
-                        )),
-                        (Some(c), Some(s), _) => Some(VisibilityError::of_masks(&masks, &truth, c, s)),
-                        _ => None,
-                    };
-                    // The antialiased passes' counts go to the note (pair-list
-                    // use and the pixels that kept the standard bit).
-                    let note = match method.lookup() {
-                        ShadowLookup::SubPixelAa(_) => {
-                            let s = self.aa_stats(matrices.len())?;
-                            let aa = format!(
-                                "aa pairs {} exact {} overflow {} wide {}",
-                                s.pairs, s.exact_pixels, s.overflow_pixels, s.wide_pixels
-                            );
-                            if note.is_empty() {
-                                aa
-                            } else {
-                                format!("{note}; {aa}")
-                            }
-                        }
-                        _ => note,
-                    };
-                    let counts = Some(Counts::compare(&masks, &truth));
+                    let result =
+                        self.method_result(method, matrices, frames, note, &masks, &truth, coverage.as_ref())?;
                     lap = self.stages.lap(RunStage::Compare, lap);
-                    let cascades = if method.cascade().is_some() { matrices.clone() } else { Vec::new() };
-                    MethodResult { matrix: matrices.first().copied(), cascades, counts, visibility, frames, note }
+                    result
                 }
                 Err(ExperimentError::Solver(e)) => MethodResult {
                     matrix: None,
@@ -871,7 +868,61 @@ impl<'a> Runner<'a> {
             };
             results.push((method, result));
         }
+        // The last method solved first: its loop's last frame drew its map
+        // into layer 0.
+        let last = shared.len().checked_sub(1);
+        self.finish_shared(shared, last, &mut results, &truth, coverage.as_ref(), lap)?;
         Ok(ConfigOutcome { light, results, truth_disagreement, elapsed: start.elapsed() })
+    }
+
+    /// One method's result from its masks: counts against the truth, the
+    /// visibility error against the coverage truth (when it ran), and for
+    /// the antialiased lookups their words and counts, read from the frame
+    /// just rendered for this method.
+    #[allow(clippy::too_many_arguments)]
+    fn method_result(
+        &mut self,
+        method: MethodSpec,
+        matrices: Vec<LightMatrix>,
+        frames: usize,
+        note: String,
+        masks: &ShadowMasks,
+        truth: &ShadowMasks,
+        coverage: Option<&Coverage>,
+    ) -> Result<MethodResult, ExperimentError> {
+        let samples = AaSamples::from_count(self.config.coverage_samples);
+        // `+aaN`: the renderer's occlusion words against the truth
+        // of the same N sub-samples; others: the shadow bit.
+        let visibility = match (coverage, samples, method.lookup()) {
+            (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
+                Some(VisibilityError::of_occlusion(&self.occlusion(matrices.len())?, truth, c, n))
+            }
+            (Some(c), Some(_), ShadowLookup::Supersampled(n)) => {
+                Some(VisibilityError::of_supersampled(&self.supersampled(matrices.len())?, masks, truth, c, n))
+            }
+            (Some(c), Some(s), _) => Some(VisibilityError::of_masks(masks, truth, c, s)),
+            _ => None,
+        };
+        // The antialiased passes' counts go to the note (pair-list
+        // use and the pixels that kept the standard bit).
+        let note = match method.lookup() {
+            ShadowLookup::SubPixelAa(_) => {
+                let s = self.aa_stats(matrices.len())?;
+                let aa = format!(
+                    "aa pairs {} exact {} overflow {} wide {}",
+                    s.pairs, s.exact_pixels, s.overflow_pixels, s.wide_pixels
+                );
+                if note.is_empty() {
+                    aa
+                } else {
+                    format!("{note}; {aa}")
+                }
+            }
+            _ => note,
+        };
+        let counts = Some(Counts::compare(masks, truth));
+        let cascades = if method.cascade().is_some() { matrices.clone() } else { Vec::new() };
+        Ok(MethodResult { matrix: matrices.first().copied(), cascades, counts, visibility, frames, note })
     }
 
     /// Mean misclassified pixels of `method` at map size `map` over the first
@@ -930,6 +981,11 @@ pub fn experiment_renderer_options() -> RendererOptions {
         readback_slots: 2,
         shadow_faces: ShadowFaces::Both,
         bias: ShadowBias::default(),
+        // Nothing here reads GPU stage times (the timing table turns them
+        // back on); without them a layer's map is kept for a later frame
+        // that would draw it again.
+        timestamps: false,
+        reuse_maps: true,
         ..RendererOptions::default()
     }
 }

@@ -34,7 +34,7 @@ pub use load::{
 pub use masks::{Flicker, MaskAgreement, ShadowMasks};
 pub use obj::{load_obj, ObjError};
 pub use procedural::{default_scene, ProceduralScene};
-pub use raycast::{Bvh, RayCaster};
+pub use raycast::{Bvh, PrimaryView, RayCaster};
 
 use crate::{Aabb, SceneBounds};
 

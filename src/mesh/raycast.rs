@@ -312,26 +312,48 @@ impl RayCaster {
     /// (`interpolated normal · to-light > 0`) and occlusion, exactly as the
     /// renderer's mask output defines them (see [`ShadowMasks`]). At most 32
     /// lights; the rest are ignored.
+    ///
+    /// The same as [`primary_view`](Self::primary_view) followed by
+    /// [`trace_masks_from`](Self::trace_masks_from); callers that trace many
+    /// lights from one camera should keep the view.
     #[must_use]
     pub fn trace_masks(&self, camera: &Camera, lights: &[Light], width: u32, height: u32) -> ShadowMasks {
-        let lights = &lights[..lights.len().min(32)];
+        self.trace_masks_from(&self.primary_view(camera, width, height), lights)
+    }
+
+    /// The light-independent half of [`trace_masks`](Self::trace_masks):
+    /// the primary ray of every pixel centre, its hit point, depth-buffer
+    /// value and normals. About two thirds of a one-light trace on the
+    /// paper's scene; an experiment's camera is fixed, so it is traced once
+    /// per run instead of once per light.
+    #[must_use]
+    pub fn primary_view(&self, camera: &Camera, width: u32, height: u32) -> PrimaryView {
         let clip_from_world = camera.clip_from_world();
         let world_from_clip = clip_from_world.inverse();
-        let pixels: Vec<(f32, u32, u32)> = (0..width * height)
+        let pixels = (0..width * height)
             .into_par_iter()
-            .map(|i| self.trace_pixel(i % width, i / width, width, height, &clip_from_world, &world_from_clip, lights))
+            .map(|i| self.primary_pixel(i % width, i / width, width, height, &clip_from_world, &world_from_clip))
             .collect();
+        PrimaryView { width, height, pixels }
+    }
+
+    /// Shadow masks of `lights` over a [`primary_view`](Self::primary_view):
+    /// the same words as [`trace_masks`](Self::trace_masks) with that view's
+    /// camera and size. At most 32 lights; the rest are ignored.
+    #[must_use]
+    pub fn trace_masks_from(&self, view: &PrimaryView, lights: &[Light]) -> ShadowMasks {
+        let lights = &lights[..lights.len().min(32)];
+        let bits: Vec<(u32, u32)> = view.pixels.par_iter().map(|p| self.light_bits(p, lights)).collect();
         ShadowMasks {
-            width,
-            height,
-            depth: pixels.iter().map(|p| p.0).collect(),
-            shadow: pixels.iter().map(|p| p.1).collect(),
-            facing: pixels.iter().map(|p| p.2).collect(),
+            width: view.width,
+            height: view.height,
+            depth: view.pixels.iter().map(|p| p.depth).collect(),
+            shadow: bits.iter().map(|b| b.0).collect(),
+            facing: bits.iter().map(|b| b.1).collect(),
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn trace_pixel(
+    fn primary_pixel(
         &self,
         x: u32,
         y: u32,
@@ -339,8 +361,7 @@ impl RayCaster {
         height: u32,
         clip_from_world: &DMat4,
         world_from_clip: &DMat4,
-        lights: &[Light],
-    ) -> (f32, u32, u32) {
+    ) -> PrimaryPixel {
         // Pixel centre to NDC: x right; row 0 at the top, NDC y up (flip).
         let ndc_x = (f64::from(x) + 0.5) / f64::from(width) * 2.0 - 1.0;
         let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(height) * 2.0;
@@ -349,12 +370,20 @@ impl RayCaster {
         let far = world_from_clip.project_point3(DVec3::new(ndc_x, ndc_y, 1.0));
         let ray = Ray { origin: near.as_vec3(), direction: (far - near).as_vec3() };
         let Some(hit) = self.bvh.closest_hit(&ray, 1.0) else {
-            return (1.0, 0, 0);
+            return PrimaryPixel::MISS;
         };
         let point = near + (far - near) * f64::from(hit.t);
         let depth = clip_from_world.project_point3(point).z as f32;
-        let point = point.as_vec3();
         let (shading, geometric) = self.normals_at(&hit);
+        PrimaryPixel { hit: true, depth, point: point.as_vec3(), shading, geometric }
+    }
+
+    /// Shadow and facing bits of one pixel for every light.
+    fn light_bits(&self, pixel: &PrimaryPixel, lights: &[Light]) -> (u32, u32) {
+        if !pixel.hit {
+            return (0, 0);
+        }
+        let (point, shading, geometric) = (pixel.point, pixel.shading, pixel.geometric);
         let (mut shadow, mut facing) = (0u32, 0u32);
         for (i, light) in lights.iter().enumerate() {
             let to_light = match *light {
@@ -368,8 +397,48 @@ impl RayCaster {
                 }
             }
         }
-        (depth, shadow, facing)
+        (shadow, facing)
     }
+}
+
+/// The camera's primary rays over a `width x height` grid of pixel centres
+/// ([`RayCaster::primary_view`]): what the shadow rays of every light start
+/// from. 44 bytes per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrimaryView {
+    width: u32,
+    height: u32,
+    pixels: Vec<PrimaryPixel>,
+}
+
+impl PrimaryView {
+    /// Width in pixels.
+    #[must_use]
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    #[must_use]
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+}
+
+/// One pixel's primary hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PrimaryPixel {
+    /// The ray hit a triangle.
+    hit: bool,
+    /// Depth-buffer value; `1.0` where the ray hit nothing.
+    depth: f32,
+    point: Vec3,
+    shading: Vec3,
+    geometric: Vec3,
+}
+
+impl PrimaryPixel {
+    const MISS: Self = Self { hit: false, depth: 1.0, point: Vec3::ZERO, shading: Vec3::ZERO, geometric: Vec3::ZERO };
 }
 
 #[cfg(test)]

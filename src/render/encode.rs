@@ -15,6 +15,8 @@ pub(crate) struct ShadowPassCounts {
     pub(crate) unclipped_unavailable: u32,
     /// Triangles drawn, all passes together.
     pub(crate) triangles: u64,
+    /// Passes drawn (the others were reused).
+    pub(crate) passes: u32,
 }
 
 /// Whether the camera pass also writes the full-resolution masks.
@@ -27,20 +29,18 @@ pub(crate) enum CameraOutput {
 }
 
 impl Renderer {
-    /// One depth-only pass per slot into `state`'s maps.
+    /// One depth-only pass per slot into `state`'s maps, but for the slots
+    /// whose layer already holds it (`reuse`; never with a timer).
     pub(crate) fn encode_shadow_passes(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         state: &LookupState,
         slots: &[&LightMatrix],
+        reuse: &[bool],
         timer: Option<&timing::FrameQueries>,
     ) -> ShadowPassCounts {
-        let mut counts = ShadowPassCounts { unclipped_unavailable: 0, triangles: 0 };
+        let mut counts = ShadowPassCounts { unclipped_unavailable: 0, triangles: 0, passes: 0 };
         let last = slots.len().saturating_sub(1);
-        if let Some(centre) = &state.maps.centre {
-            // The centre-sampled depths start empty (word 0) every frame.
-            encoder.clear_buffer(&centre.buffer, 0, None);
-        }
         for (i, m) in slots.iter().enumerate() {
             let wanted = if m.needs_unclipped_depth { DepthClip::Unclipped } else { DepthClip::Clipped };
             // Conservative rasterization draws its own (reshaped) triangles: no culling.
@@ -48,6 +48,15 @@ impl Renderer {
             let (pipeline, clip) = state.shadow.pipeline(wanted, cull);
             if clip != wanted {
                 counts.unclipped_unavailable += 1;
+            }
+            if reuse.get(i).copied().unwrap_or(false) {
+                continue;
+            }
+            counts.passes += 1;
+            if let Some(centre) = state.maps.centre.as_ref().filter(|c| c.stride > 0) {
+                // A drawn map's centre-sampled depths start empty (word 0);
+                // a reused one keeps its own.
+                encoder.clear_buffer(&centre.buffer, i as u64 * centre.stride, Some(centre.stride));
             }
             let timestamp_writes = self.timer.as_ref().zip(timer).and_then(|(t, q)| {
                 // With SGSM the sweep ends the shadow stage.

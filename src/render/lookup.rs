@@ -278,6 +278,11 @@ impl LookupState {
         }
     }
 
+    /// Replaces the maps by the smallest; frames grow them again on demand.
+    pub(crate) fn release_maps(&mut self, device: &wgpu::Device) {
+        self.maps = ShadowMaps::new(device, &self.maps_layout, self.map_color, self.sweep.as_ref(), 1, 1, 1);
+    }
+
     /// Builds the view-capture pipelines of this mode's camera shader.
     pub(crate) fn ensure_deferred(&mut self, device: &wgpu::Device, layouts: &SceneLayouts) {
         self.camera.deferred(device, layouts, &self.maps_layout);
@@ -499,14 +504,21 @@ pub(crate) struct ShadowMaps {
     pub(crate) bind_group: wgpu::BindGroup,
     pub(crate) width: u32,
     pub(crate) height: u32,
+    /// What each layer holds (`reuse.rs`).
+    pub(crate) drawn: super::reuse::MapRecords,
 }
 
 impl ShadowMaps {
     fn new(device: &wgpu::Device, spec: &MapsSpec<'_>, width: u32, height: u32, layers: u32) -> Self {
         let MapsSpec { layout, color, sweep, centre } = *spec;
-        // At least two layers: the GL backend makes a one-layer texture a
-        // plain 2D texture, which then reads as zero through the array view.
-        let layers = layers.max(2);
+        // At least two layers and never six: the GL backend makes a one-layer
+        // texture a plain 2D texture and a six-layer one a cube map, which
+        // then read wrongly through the array view (six lights' masks were
+        // all shadow).
+        let layers = match layers.max(2) {
+            6 => 7,
+            n => n,
+        };
         let array = |label: &str, format| {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -568,7 +580,18 @@ impl ShadowMaps {
             Some((texture, _, layers)) => (Some(texture), layers),
             None => (None, Vec::new()),
         };
-        Self { depth_array, color, depth_layers, color_layers, sgsm, centre, bind_group, width, height }
+        Self {
+            depth_array,
+            color,
+            depth_layers,
+            color_layers,
+            sgsm,
+            centre,
+            bind_group,
+            width,
+            height,
+            drawn: Default::default(),
+        }
     }
 
     pub(crate) fn layers(&self) -> u32 {

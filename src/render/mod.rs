@@ -47,6 +47,7 @@ mod options;
 mod output;
 pub(crate) mod passes;
 pub mod readback;
+mod reuse;
 pub mod sgsm;
 pub mod spsm;
 pub mod subpixel;
@@ -235,6 +236,9 @@ pub struct FrameReport {
     pub shadow_triangles: u64,
     /// Triangles drawn by the camera pass.
     pub camera_triangles: u64,
+    /// Shadow passes skipped because their layer already held their map
+    /// ([`RendererOptions::reuse_maps`]); not counted in `shadow_passes`.
+    pub maps_reused: u32,
     /// CPU time spent encoding and submitting.
     pub cpu_time: std::time::Duration,
 }
@@ -607,6 +611,16 @@ impl Renderer {
         Ok(())
     }
 
+    /// Drops every lookup mode's shadow maps; the next frame allocates what
+    /// it needs. Maps only grow otherwise (in size and in layers), so frames
+    /// with large maps after a frame of many lights would keep, and clear
+    /// on first use, as many large layers.
+    pub fn release_maps(&mut self) {
+        for state in &mut self.lookups {
+            state.release_maps(&self.device);
+        }
+    }
+
     /// Drops the view capture: every frame draws its camera pass again.
     pub fn release_view(&mut self) {
         self.capture = None;
@@ -628,7 +642,7 @@ impl Renderer {
         let started = Instant::now();
         self.errors.take(&self.device, "an earlier device call")?;
         let slots = self.prepare(frame)?;
-        self.write_uniforms(frame, &slots);
+        let shadow_raw = self.write_uniforms(frame, &slots);
 
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some(&format!("lixel frame {}", self.frame)),
@@ -642,7 +656,12 @@ impl Renderer {
             self.lookups[slots.lookup].ensure_deferred(&self.device, &self.layouts);
         }
         let state = &self.lookups[slots.lookup];
-        let shadow = self.encode_shadow_passes(&mut encoder, state, &slots.maps, timer.as_ref());
+        let reuse = if self.options.reuse_maps && timer.is_none() && state.sweep.is_none() {
+            state.maps.drawn.reusable(&slots.maps, &shadow_raw)
+        } else {
+            vec![false; slots.maps.len()]
+        };
+        let shadow = self.encode_shadow_passes(&mut encoder, state, &slots.maps, &reuse, timer.as_ref());
         // The depth analysis and the antialiased passes read the camera pass's masks.
         let aa = match frame.lookup {
             ShadowLookup::SubPixelAa(samples) => Some(samples),
@@ -683,7 +702,12 @@ impl Renderer {
             timer.resolve(&mut encoder, t);
         }
         let submission = self.queue.submit([encoder.finish()]);
-        self.errors.take(&self.device, "rendering a frame")?;
+        let drawn = &mut self.lookups[slots.lookup].maps.drawn;
+        if let Err(e) = self.errors.take(&self.device, "rendering a frame") {
+            drawn.forget();
+            return Err(e);
+        }
+        drawn.record(&slots.maps, &shadow_raw);
 
         let analysis_slot = analysis_staging.map(|(slot, _)| slot);
         if let (Some(slot), Some(request)) = (analysis_slot, frame.analysis) {
@@ -703,9 +727,10 @@ impl Renderer {
             analysis_skipped: frame.analysis.is_some() && analysis_slot.is_none(),
             analysis_queued: analysis_slot.is_some(),
             unclipped_unavailable: shadow.unclipped_unavailable,
-            shadow_passes: slots.maps.len() as u32,
+            shadow_passes: shadow.passes,
             shadow_triangles: shadow.triangles,
             camera_triangles,
+            maps_reused: slots.maps.len() as u32 - shadow.passes,
             cpu_time: started.elapsed(),
         };
         self.frame += 1;
@@ -760,9 +785,9 @@ impl Renderer {
         Ok(self.lookups.len() - 1)
     }
 
-    /// Camera, lights of both scene passes and the shadow passes' slots.
-    /// Light intensity is split so that n lights add up to 1.
-    fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) {
+    /// Camera, lights of both scene passes and the shadow passes' slots
+    /// (returned). Light intensity is split so that n lights add up to 1.
+    fn write_uniforms(&self, frame: &Frame<'_>, slots: &MapSlots<'_>) -> Vec<ShadowPassRaw> {
         let light_color = |n: usize| Vec3::splat((1.0 - self.options.ambient) / n.max(1) as f32);
         let cascade = |i: usize| self.cascades.get(i).and_then(Option::as_ref);
         // The SPSM pass and lookup (SGSM builds on both) compare in a depth of their own (see
@@ -821,6 +846,7 @@ impl Renderer {
             let state = &self.lookups[slots.lookup];
             self.queue.write_buffer(&state.shadow.uniforms, 0, bytemuck::cast_slice(&shadow_raw));
         }
+        shadow_raw
     }
 
     /// The newest analysis readback that has arrived, without waiting (one

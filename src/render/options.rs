@@ -145,6 +145,13 @@ pub struct RendererOptions {
     /// outside its clip volume (the output is the same; see
     /// [`FrameReport::shadow_triangles`](super::FrameReport::shadow_triangles)).
     pub cull_objects: bool,
+    /// Skip a shadow pass whose layer still holds what it would draw: the
+    /// same matrix and uniforms as the last pass into that layer of the same
+    /// lookup mode's maps (a pass is a pure function of them, so the output
+    /// is the same; see [`FrameReport::maps_reused`](super::FrameReport::maps_reused)).
+    /// Not for frames with GPU timestamps (which time every pass) nor SGSM
+    /// (its sweep follows the passes); off by default.
+    pub reuse_maps: bool,
 }
 
 impl Default for RendererOptions {
@@ -159,6 +166,7 @@ impl Default for RendererOptions {
             background: Vec3::new(0.55, 0.68, 0.85),
             timestamps: true,
             cull_objects: true,
+            reuse_maps: false,
         }
     }
 }
