@@ -280,7 +280,17 @@ impl LookupState {
 
     /// Replaces the maps by the smallest; frames grow them again on demand.
     pub(crate) fn release_maps(&mut self, device: &wgpu::Device) {
-        self.maps = ShadowMaps::new(device, &self.maps_layout, self.map_color, self.sweep.as_ref(), 1, 1, 1);
+        self.maps = ShadowMaps::new(device, &self.maps_spec(), 1, 1, 1);
+    }
+
+    /// What the maps are built with.
+    fn maps_spec(&self) -> MapsSpec<'_> {
+        MapsSpec {
+            layout: &self.maps_layout,
+            color: self.map_color,
+            sweep: self.sweep.as_ref(),
+            centre: self.shadow.centre_layout.as_ref(),
+        }
     }
 
     /// Builds the view-capture pipelines of this mode's camera shader.
@@ -292,15 +302,9 @@ impl LookupState {
     pub(crate) fn ensure_maps(&mut self, device: &wgpu::Device, width: u32, height: u32, layers: u32) {
         let maps = &self.maps;
         if width > maps.width || height > maps.height || layers > maps.layers() {
-            let spec = MapsSpec {
-                layout: &self.maps_layout,
-                color: self.map_color,
-                sweep: self.sweep.as_ref(),
-                centre: self.shadow.centre_layout.as_ref(),
-            };
             self.maps = ShadowMaps::new(
                 device,
-                &spec,
+                &self.maps_spec(),
                 width.max(maps.width),
                 height.max(maps.height),
                 layers.max(maps.layers()),
