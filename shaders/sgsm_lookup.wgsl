@@ -51,7 +51,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     }
     if spsm_inside(own, p) {
         sgsm_count(SGSM_PATH_OWN);
-        return sgsm_plane_test(own, p, zeta);
+        return spsm_decide(light, k, world, SPSM_PATH_OWN, sgsm_plane_test(own, p, zeta));
     }
     let word = textureLoad(sgsm_masks, k, light.layer, 0).x;
     let status = (word >> 9u) & 3u;
@@ -60,7 +60,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         let full = sgsm_plane_test(spsm_load(light, k + sgsm_slot_offset(slot)), p, zeta);
         if full || spsm_other_surface_lit(own, p, zeta) {
             sgsm_count(SGSM_PATH_FULL);
-            return full;
+            return spsm_decide(light, k, world, select(SGSM_PATH_PLANE_LIT, SGSM_PATH_PLANE_SHADOWED, full), full);
         }
     }
     if status == SGSM_PATTERN {
@@ -86,7 +86,8 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         }
         if found && (best < zeta - SPSM_BIAS || spsm_other_surface_lit(own, p, zeta)) {
             sgsm_count(SGSM_PATH_PATTERN);
-            return best < zeta - SPSM_BIAS;
+            let shadowed = best < zeta - SPSM_BIAS;
+            return spsm_decide(light, k, world, select(SGSM_PATH_PLANE_LIT, SGSM_PATH_PLANE_SHADOWED, shadowed), shadowed);
         }
     }
     sgsm_count(SGSM_PATH_FALLBACK);

@@ -32,6 +32,41 @@
 // spsm_pass.wgsl; bound as unfilterable float), binding 1 the texels.
 @group(1) @binding(0) var spsm_depths: texture_2d_array<f32>;
 @group(1) @binding(1) var spsm_texels: texture_2d_array<u32>;
+// Binding 4: the centre-sampled depth words of spsm_pass.wgsl
+// (spsm_store_centre), one block per layer of the maps' texel count rounded
+// up to 64 words (256 bytes, the dynamic-offset alignment of the pass).
+@group(1) @binding(4) var<storage, read> spsm_centre: array<u32>;
+
+// The standard lookup's verdict at texel `k` for the receiver at `world`,
+// from the centre-sampled depth the conservative pass kept beside the
+// triangle (session 5): 0 lit, 1 shadowed, 2 unavailable (the buffer is too
+// small: maps beyond the device's storage-buffer limit). As
+// lookup_depth_compare.wgsl: the nearest surface at the texel centre in
+// biased linear light depth against the receiver's.
+fn spsm_standard(light: Light, k: vec2<i32>, world: vec3<f32>) -> u32 {
+    let dims = textureDimensions(spsm_texels).xy;
+    let stride = (dims.x * dims.y + 63u) / 64u * 64u;
+    let index = light.layer * stride + u32(k.y) * u32(light.map_size.x) + u32(k.x);
+    if index >= arrayLength(&spsm_centre) {
+        return 2u;
+    }
+    let word = spsm_centre[index];
+    if word == 0u {
+        return 0u;
+    }
+    let depth = clamp(linear_light_depth(light.position, light.depth.xy, world), 0.0, 1.0);
+    return select(0u, 1u, bitcast<f32>(~word) < depth);
+}
+
+// The verdict of path `path` (an SPSM_PATH_* bit): the standard lookup's
+// where SPSM_FALLBACK covers the path, else SPSM's own.
+fn spsm_decide(light: Light, k: vec2<i32>, world: vec3<f32>, path: u32, own_verdict: bool) -> bool {
+    if (SPSM_FALLBACK & path) == 0u {
+        return own_verdict;
+    }
+    let standard = spsm_standard(light, k, world);
+    return select(own_verdict, standard == 1u, standard != 2u);
+}
 
 // The consistent minimum depth the pass stored for texel `k` (inside the
 // map): the inverse of spsm_depth_key, exact to f32 (no packing error).
@@ -270,6 +305,17 @@ fn spsm_recover(light: Light, k: vec2<i32>, pattern: u32, p: vec2<f32>) -> bool 
     return true;
 }
 
+// The paths of in_shadow that SPSM_FALLBACK (a bit set per path) may hand
+// to the standard lookup (spsm_decide). SGSM adds its plane paths.
+const SPSM_PATH_OWN: u32 = 1u;
+const SPSM_PATH_NEIGHBOUR: u32 = 2u;
+const SPSM_PATH_OWN_PLANE: u32 = 4u;
+const SPSM_PATH_SURFACE: u32 = 8u;
+const SPSM_PATH_UNIFORM: u32 = 16u;
+const SPSM_PATH_RECOVER: u32 = 32u;
+const SGSM_PATH_PLANE_LIT: u32 = 64u;
+const SGSM_PATH_PLANE_SHADOWED: u32 = 128u;
+
 // A small stored triangle (twice its area below this, in texels²) is taken
 // for a facet of a finely tessellated curved surface (session 4).
 const SPSM_FACET_AREA: f32 = 2.0;
@@ -336,7 +382,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     let own_plane = spsm_plane_at(own, p);
     let own_slack = SPSM_BIAS + SPSM_TOLERANCE * own_plane.y;
     if spsm_inside(own, p) {
-        return own_plane.x < zeta - own_slack;
+        return spsm_decide(light, k, world, SPSM_PATH_OWN, own_plane.x < zeta - own_slack);
     }
     // The own texel's closest triangle, extended to p, is not in front of p
     // by more than its own depth change across one texel (a curved
@@ -362,7 +408,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
             if t.kind == 0u && spsm_inside(t, p) {
                 let plane = spsm_plane_at(spsm_slopes(light, t, ki), p);
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {
-                    return true;
+                    return spsm_decide(light, k, world, SPSM_PATH_NEIGHBOUR, true);
                 }
                 on_surface = on_surface || own_clear;
             }
@@ -371,8 +417,14 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
             pattern |= 1u << i;
         }
     }
-    if on_own_plane || on_surface {
-        return false;
+    if on_own_plane {
+        return spsm_decide(light, k, world, SPSM_PATH_OWN_PLANE, false);
     }
-    return spsm_recover(light, k, pattern, p);
+    if on_surface {
+        return spsm_decide(light, k, world, SPSM_PATH_SURFACE, false);
+    }
+    if pattern == 0u || pattern == 0x1ffu {
+        return spsm_decide(light, k, world, SPSM_PATH_UNIFORM, pattern != 0u);
+    }
+    return spsm_decide(light, k, world, SPSM_PATH_RECOVER, spsm_recover(light, k, pattern, p));
 }

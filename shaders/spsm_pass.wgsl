@@ -38,6 +38,16 @@ struct ShadowPass {
 // The scene's VertexRaw words (7 per vertex: position xyz, normal xyz, albedo).
 @group(0) @binding(1) var<storage, read> scene_vertices: array<u32>;
 @group(0) @binding(2) var<storage, read> scene_indices: array<u32>;
+// The centre-sampled depth of the texel (session 5): what a standard shadow
+// pass (shadow.wgsl) would store, the minimum over the triangles covering
+// the texel centre of their biased linear light depth there, kept as the
+// complement of its bits with atomicMax (non-negative floats order as
+// their bits) so that the cleared word 0 means "no triangle covers the
+// centre". One map's words, row-major with
+// the map's width (the renderer binds this light's layer of the buffer with
+// a dynamic offset). The lookup falls back to it where its own recovery is
+// unsure (spsm_lookup.wgsl, spsm_standard).
+@group(1) @binding(0) var<storage, read_write> spsm_centre: array<atomic<u32>>;
 
 struct SpsmVertex {
     @builtin(position) clip: vec4<f32>,
@@ -47,12 +57,21 @@ struct SpsmVertex {
     @location(3) @interpolate(flat) zeta: vec3<f32>,
     // 0: conservative; 1: clipped fallback.
     @location(4) @interpolate(flat) mode: u32,
+    // The world positions and clip w of the vertices (the centre-sampled
+    // depth: perspective-correct interpolation at the texel centre).
+    @location(5) @interpolate(flat) x0: vec3<f32>,
+    @location(6) @interpolate(flat) x1: vec3<f32>,
+    @location(7) @interpolate(flat) x2: vec3<f32>,
+    @location(8) @interpolate(flat) w: vec3<f32>,
+}
+
+fn spsm_world_of(index_slot: u32) -> vec3<f32> {
+    let v = scene_indices[index_slot] * 7u;
+    return vec3<f32>(bitcast<f32>(scene_vertices[v]), bitcast<f32>(scene_vertices[v + 1u]), bitcast<f32>(scene_vertices[v + 2u]));
 }
 
 fn spsm_clip_of(index_slot: u32) -> vec4<f32> {
-    let v = scene_indices[index_slot] * 7u;
-    let p = vec3<f32>(bitcast<f32>(scene_vertices[v]), bitcast<f32>(scene_vertices[v + 1u]), bitcast<f32>(scene_vertices[v + 2u]));
-    return shadow_pass.clip_from_world * vec4<f32>(p, 1.0);
+    return shadow_pass.clip_from_world * vec4<f32>(spsm_world_of(index_slot), 1.0);
 }
 
 fn spsm_to_texel(clip: vec4<f32>) -> vec2<f32> {
@@ -89,6 +108,10 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     out.t2 = t[2];
     out.zeta = vec3<f32>(c[0].z / c[0].w, c[1].z / c[1].w, c[2].z / c[2].w);
     out.mode = 0u;
+    out.x0 = spsm_world_of(first);
+    out.x1 = spsm_world_of(first + 1u);
+    out.x2 = spsm_world_of(first + 2u);
+    out.w = vec3<f32>(c[0].w, c[1].w, c[2].w);
 
     // The padded bounding box and the right triangle (lo, lo + 2 (hi - lo) x, lo + 2 (hi - lo) y) around it.
     let margin = 0.5 + 1.0 / 64.0;
@@ -168,6 +191,44 @@ fn spsm_depth_key(zeta: f32) -> f32 {
     return 0.5 + 0.5 * zeta / (1.0 + abs(zeta));
 }
 
+// The linear light depth (light_depth.wgsl) of the triangle's plane at
+// texel position `q`: the world point there by perspective-correct
+// barycentrics (weights b_i / w_i).
+fn spsm_linear_depth_at(in: SpsmVertex, q: vec2<f32>) -> f32 {
+    let b = vec3<f32>(spsm_cross(in.t2 - in.t1, q - in.t1), spsm_cross(in.t0 - in.t2, q - in.t2), spsm_cross(in.t1 - in.t0, q - in.t0)) / in.w;
+    let x = (b.x * in.x0 + b.y * in.x1 + b.z * in.x2) / (b.x + b.y + b.z);
+    return linear_light_depth(shadow_pass.position, shadow_pass.depth.xy, x);
+}
+
+// A triangle covering texel centre `c` (edges included) offers its linear
+// light depth there to the texel's centre-sampled depth, biased as
+// shadow.wgsl biases a standard map: constant plus slope scale times the
+// larger change over one texel (here from the plane at c + x and c + y
+// rather than the rasterizer's dpdx / dpdy), clamped when a clamp is set.
+fn spsm_store_centre(in: SpsmVertex, c: vec2<f32>) {
+    let t0 = in.t0;
+    let t1 = in.t1;
+    let t2 = in.t2;
+    let area = spsm_cross(t1 - t0, t2 - t0);
+    let e0 = spsm_cross(t1 - t0, c - t0) * area;
+    let e1 = spsm_cross(t2 - t1, c - t1) * area;
+    let e2 = spsm_cross(t0 - t2, c - t2) * area;
+    if area == 0.0 || e0 < 0.0 || e1 < 0.0 || e2 < 0.0 {
+        return;
+    }
+    let depth = spsm_linear_depth_at(in, c);
+    let slope = max(abs(spsm_linear_depth_at(in, c + vec2<f32>(1.0, 0.0)) - depth), abs(spsm_linear_depth_at(in, c + vec2<f32>(0.0, 1.0)) - depth));
+    var bias = shadow_pass.depth.z + shadow_pass.depth.w * slope;
+    if shadow_pass.clamp.x > 0.0 {
+        bias = min(bias, shadow_pass.clamp.x);
+    }
+    let width = u32(shadow_pass.clamp.y);
+    let index = u32(c.y) * width + u32(c.x);
+    if index < arrayLength(&spsm_centre) && u32(c.x) < width {
+        atomicMax(&spsm_centre[index], ~bitcast<u32>(clamp(depth + bias, 0.0, 1.0)));
+    }
+}
+
 struct SpsmOutput {
     @location(0) texel: vec4<u32>,
     @builtin(frag_depth) depth: f32,
@@ -199,6 +260,7 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     } else {
         zeta_c = in.zeta.x + dot(g, c - in.t0);
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
+        spsm_store_centre(in, c);
     }
     let slopes = g * shadow_pass.clamp.yz;
     out.texel = vec4<u32>(

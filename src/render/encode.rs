@@ -53,6 +53,11 @@ impl Renderer {
                 continue;
             }
             counts.passes += 1;
+            if let Some(centre) = state.maps.centre.as_ref().filter(|c| c.stride > 0) {
+                // A drawn map's centre-sampled depths start empty (word 0);
+                // a reused one keeps its own.
+                encoder.clear_buffer(&centre.buffer, i as u64 * centre.stride, Some(centre.stride));
+            }
             let timestamp_writes = self.timer.as_ref().zip(timer).and_then(|(t, q)| {
                 // With SGSM the sweep ends the shadow stage.
                 t.pass_writes(q, timing::Stage::Shadow, i == 0, i == last && state.sweep.is_none())
@@ -91,6 +96,9 @@ impl Renderer {
             pass.set_scissor_rect(0, 0, w, h);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &state.shadow.bind_group, &[(i as u64 * SHADOW_SLOT_STRIDE) as u32]);
+            if let Some(centre) = &state.maps.centre {
+                pass.set_bind_group(1, &centre.pass_bind_group, &[(i as u64 * centre.stride) as u32]);
+            }
             counts.triangles += if state.pulls_vertices {
                 // The pass's own depth is never clipped at near and far.
                 self.draw_pulled(&mut pass, &m.clip_from_world, DepthClip::Unclipped)

@@ -191,6 +191,19 @@ impl LookupState {
             let sample_type = format.sample_type(None, None).unwrap_or(wgpu::TextureSampleType::Uint);
             entries.push(map_entry(1, sample_type));
         }
+        if spec.pulls_vertices {
+            // SPSM's centre-sampled depths (CentreDepths), read by the lookup.
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 4,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            });
+        }
         let sweep = spec.sgsm.map(|options| SweepPass::new(device, &options));
         if let Some(sweep) = &sweep {
             entries.push(map_entry(2, wgpu::TextureSampleType::Uint));
@@ -237,19 +250,27 @@ impl LookupState {
             format!("lixel shadow shader ({})", lookup.name()),
             wgpu::ShaderSource::Wgsl(Cow::Owned(shadow_source)),
         );
+        let shadow = ShadowPass::new(
+            device,
+            &shadow_module,
+            spec.map_color,
+            sweep.is_some(),
+            unclipped_available,
+            spec.pulls_vertices.then_some(scene),
+        );
+        let maps_spec = MapsSpec {
+            layout: &maps_layout,
+            color: spec.map_color,
+            sweep: sweep.as_ref(),
+            centre: shadow.centre_layout.as_ref(),
+        };
+        let maps = ShadowMaps::new(device, &maps_spec, 1, 1, 1);
         Self {
             lookup,
-            shadow: ShadowPass::new(
-                device,
-                &shadow_module,
-                spec.map_color,
-                sweep.is_some(),
-                unclipped_available,
-                spec.pulls_vertices.then_some(scene),
-            ),
+            shadow,
             camera: CameraPass::new(device, &layouts.camera, &maps_layout, &camera_module),
             analysis: AnalysisPass::new(device, &layouts.analysis, &maps_layout, &analysis_module),
-            maps: ShadowMaps::new(device, &maps_layout, spec.map_color, sweep.as_ref(), 1, 1, 1),
+            maps,
             maps_layout,
             map_color: spec.map_color,
             pulls_vertices: spec.pulls_vertices,
@@ -259,7 +280,17 @@ impl LookupState {
 
     /// Replaces the maps by the smallest; frames grow them again on demand.
     pub(crate) fn release_maps(&mut self, device: &wgpu::Device) {
-        self.maps = ShadowMaps::new(device, &self.maps_layout, self.map_color, self.sweep.as_ref(), 1, 1, 1);
+        self.maps = ShadowMaps::new(device, &self.maps_spec(), 1, 1, 1);
+    }
+
+    /// What the maps are built with.
+    fn maps_spec(&self) -> MapsSpec<'_> {
+        MapsSpec {
+            layout: &self.maps_layout,
+            color: self.map_color,
+            sweep: self.sweep.as_ref(),
+            centre: self.shadow.centre_layout.as_ref(),
+        }
     }
 
     /// Builds the view-capture pipelines of this mode's camera shader.
@@ -273,9 +304,7 @@ impl LookupState {
         if width > maps.width || height > maps.height || layers > maps.layers() {
             self.maps = ShadowMaps::new(
                 device,
-                &self.maps_layout,
-                self.map_color,
-                self.sweep.as_ref(),
+                &self.maps_spec(),
                 width.max(maps.width),
                 height.max(maps.height),
                 layers.max(maps.layers()),
@@ -307,6 +336,9 @@ pub(crate) struct ShadowPass {
     pipelines: [Option<wgpu::RenderPipeline>; 6],
     pub(crate) uniforms: wgpu::Buffer,
     pub(crate) bind_group: wgpu::BindGroup,
+    /// SPSM and SGSM: group 1 of the pass, the centre-sampled depths
+    /// ([`CentreDepths`]) at a dynamic offset per map.
+    pub(crate) centre_layout: Option<wgpu::BindGroupLayout>,
 }
 
 impl ShadowPass {
@@ -345,9 +377,24 @@ impl ShadowPass {
             label: Some("lixel shadow bind group layout"),
             entries: &layout_entries,
         });
+        let centre_layout = pulled.is_some().then(|| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("lixel spsm centre depths layout"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: true,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                }],
+            })
+        });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lixel shadow pipeline layout"),
-            bind_group_layouts: &[Some(&layout)],
+            bind_group_layouts: &[Some(&layout), centre_layout.as_ref()],
             immediate_size: 0,
         });
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
@@ -425,7 +472,7 @@ impl ShadowPass {
                 })
             })
         });
-        Self { pipelines, uniforms, bind_group }
+        Self { pipelines, uniforms, bind_group, centre_layout }
     }
 
     /// The pipeline for a map; unclipped depth falls back to clipped when
@@ -456,6 +503,8 @@ pub(crate) struct ShadowMaps {
     pub(crate) color_layers: Vec<wgpu::TextureView>,
     /// SGSM's slopes and masks.
     pub(crate) sgsm: Option<SgsmMaps>,
+    /// SPSM and SGSM: the centre-sampled depths.
+    pub(crate) centre: Option<CentreDepths>,
     pub(crate) bind_group: wgpu::BindGroup,
     pub(crate) width: u32,
     pub(crate) height: u32,
@@ -464,15 +513,8 @@ pub(crate) struct ShadowMaps {
 }
 
 impl ShadowMaps {
-    fn new(
-        device: &wgpu::Device,
-        layout: &wgpu::BindGroupLayout,
-        color: Option<wgpu::TextureFormat>,
-        sweep: Option<&SweepPass>,
-        width: u32,
-        height: u32,
-        layers: u32,
-    ) -> Self {
+    fn new(device: &wgpu::Device, spec: &MapsSpec<'_>, width: u32, height: u32, layers: u32) -> Self {
+        let MapsSpec { layout, color, sweep, centre } = *spec;
         // At least two layers and never six: the GL backend makes a one-layer
         // texture a plain 2D texture and a six-layer one a cube map, which
         // then read wrongly through the array view (six lights' masks were
@@ -529,6 +571,10 @@ impl ShadowMaps {
         if let Some(counters) = sweep.and_then(|s| s.counters.as_ref()) {
             entries.push(wgpu::BindGroupEntry { binding: 3, resource: counters.as_entire_binding() });
         }
+        let centre = centre.map(|pass_layout| CentreDepths::new(device, pass_layout, width, height, layers));
+        if let Some(c) = &centre {
+            entries.push(wgpu::BindGroupEntry { binding: 4, resource: c.buffer.as_entire_binding() });
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lixel shadow maps bind group"),
             layout,
@@ -544,6 +590,7 @@ impl ShadowMaps {
             depth_layers,
             color_layers,
             sgsm,
+            centre,
             bind_group,
             width,
             height,
@@ -553,5 +600,63 @@ impl ShadowMaps {
 
     pub(crate) fn layers(&self) -> u32 {
         self.depth_layers.len() as u32
+    }
+}
+
+/// What [`ShadowMaps::new`] builds besides the depth array.
+#[derive(Clone, Copy)]
+struct MapsSpec<'a> {
+    /// The camera and analysis passes' group-1 layout.
+    layout: &'a wgpu::BindGroupLayout,
+    /// [`LookupSpec::map_color`].
+    color: Option<wgpu::TextureFormat>,
+    sweep: Option<&'a SweepPass>,
+    /// [`ShadowPass::centre_layout`].
+    centre: Option<&'a wgpu::BindGroupLayout>,
+}
+
+/// SPSM's centre-sampled depths (issue 16, session 5): per texel, the
+/// depth a standard shadow pass would store (`spsm_store_centre` in
+/// `shaders/spsm_pass.wgsl`, an atomic per covering fragment), which the
+/// lookup falls back to where its own silhouette recovery is unsure. One
+/// block of [`stride`](Self::stride) bytes per layer; the pass binds its
+/// map's block at a dynamic offset, the lookup the whole buffer.
+pub(crate) struct CentreDepths {
+    pub(crate) buffer: wgpu::Buffer,
+    pub(crate) pass_bind_group: wgpu::BindGroup,
+    /// Bytes per layer: the layer's texel count times 4, rounded up to the
+    /// 256-byte storage offset alignment.
+    pub(crate) stride: u64,
+}
+
+impl CentreDepths {
+    fn new(device: &wgpu::Device, pass_layout: &wgpu::BindGroupLayout, width: u32, height: u32, layers: u32) -> Self {
+        let stride = (u64::from(width) * u64::from(height) * 4).div_ceil(256) * 256;
+        let limits = device.limits();
+        let wanted = stride * u64::from(layers);
+        // Beyond the device's limits a 256-byte buffer stands in: the pass
+        // writes nothing into it (a map has more texels) and the lookup sees
+        // it too small and keeps SPSM's own verdicts (spsm_standard).
+        let fits = wanted <= limits.max_storage_buffer_binding_size && wanted <= limits.max_buffer_size;
+        let (size, stride) = if fits { (wanted, stride) } else { (256, 0) };
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lixel spsm centre depths"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let pass_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lixel spsm centre depths (pass)"),
+            layout: pass_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(if fits { stride } else { 256 }),
+                }),
+            }],
+        });
+        Self { buffer, pass_bind_group, stride }
     }
 }

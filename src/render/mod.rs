@@ -71,7 +71,7 @@ pub use options::{AnalysisSource, RendererOptions, ShadowBias, ShadowFaces};
 pub use output::{masks_image, shadow_map_image, DepthImage};
 pub use readback::{Readback, ReadbackLatency, ReadbackRing, RingStats};
 pub use sgsm::{SgsmCounts, SgsmOptions};
-pub use spsm::SpsmOptions;
+pub use spsm::{SpsmOptions, StandardFallback};
 pub use timing::GpuFrameTimes;
 pub use uniforms::MAX_LIGHTS;
 

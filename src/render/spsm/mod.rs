@@ -58,15 +58,72 @@ pub struct SpsmOptions {
     /// focused+spsm 434.8 against 296.7 misclassified), hence off in
     /// [`Self::PAPER`].
     pub thin_casters: bool,
+    /// Where the lookup takes the standard lookup's verdict instead of its
+    /// own (issue 16, session 5; see [`StandardFallback`]).
+    pub standard_fallback: StandardFallback,
+}
+
+/// Which SPSM verdicts are replaced by the standard lookup's: the verdict
+/// of a plain depth compare against a centre-sampled depth (the nearest
+/// triangle covering the texel centre, biased as a standard map), which the
+/// conservative pass keeps beside each texel's triangle
+/// (`spsm_store_centre` in `shaders/spsm_pass.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum StandardFallback {
+    /// SPSM's own verdict everywhere (the paper's lookup).
+    Off,
+    /// The hybrid lookup, the default: where p lies on none of the stored
+    /// triangles of its 3x3 neighbourhood (the paper's "uncertain" pixels:
+    /// a uniform or mixed depth-test pattern, the silhouette recovery's
+    /// domain) the standard verdict decides; verdicts from a stored
+    /// triangle containing p, or from p's own plane, stay SPSM's. Measured
+    /// per path on the default preset (issue-16 note, session 5): the
+    /// recovery's and the uniform patterns' verdicts were worse than the
+    /// standard's, the triangle paths' better.
+    #[default]
+    Uncertain,
+    /// The standard verdict everywhere: the standard lookup computed from
+    /// SPSM's maps (for tests and diagnosis; it matches
+    /// [`ShadowLookup::DepthCompare`](super::ShadowLookup::DepthCompare)
+    /// up to the depth space, `z / w` instead of linear light depth).
+    Always,
+}
+
+impl StandardFallback {
+    /// The paths of `in_shadow` in `shaders/spsm_lookup.wgsl` (and SGSM's
+    /// plane paths) whose verdict the standard lookup gives: a mask of the
+    /// shader's `SPSM_PATH_*` bits.
+    fn paths(self) -> u32 {
+        match self {
+            Self::Off => 0,
+            // SPSM_PATH_UNIFORM | SPSM_PATH_RECOVER
+            Self::Uncertain => 16 | 32,
+            Self::Always => 0xff,
+        }
+    }
 }
 
 impl SpsmOptions {
     /// The paper's settings (exponent 5, bias 1e-5) with the packing
     /// tolerance; the default.
-    pub const PAPER: Self = Self { exponent: 5.0, bias: 1e-5, packing_tolerance: true, thin_casters: false };
+    pub const PAPER: Self = Self {
+        exponent: 5.0,
+        bias: 1e-5,
+        packing_tolerance: true,
+        thin_casters: false,
+        standard_fallback: StandardFallback::Uncertain,
+    };
 
-    /// [`Self::PAPER`] with [`thin_casters`](Self::thin_casters).
-    pub const THIN_CASTERS: Self = Self { thin_casters: true, ..Self::PAPER };
+    /// [`Self::PAPER`] without the [`standard_fallback`](Self::standard_fallback)
+    /// ([`StandardFallback::Off`]):
+    /// the paper's lookup alone, silhouette recovery included.
+    pub const SUBPIXEL_ONLY: Self = Self { standard_fallback: StandardFallback::Off, ..Self::PAPER };
+
+    /// [`Self::SUBPIXEL_ONLY`] with [`thin_casters`](Self::thin_casters)
+    /// (the thin-band recovery is what keeps sub-texel wires; the
+    /// fallback would hand those pixels to the standard lookup).
+    pub const THIN_CASTERS: Self = Self { thin_casters: true, ..Self::SUBPIXEL_ONLY };
 }
 
 impl Default for SpsmOptions {
@@ -81,6 +138,7 @@ impl PartialEq for SpsmOptions {
             && self.bias.to_bits() == other.bias.to_bits()
             && self.packing_tolerance == other.packing_tolerance
             && self.thin_casters == other.thin_casters
+            && self.standard_fallback == other.standard_fallback
     }
 }
 
@@ -88,7 +146,14 @@ impl Eq for SpsmOptions {}
 
 impl Hash for SpsmOptions {
     fn hash<H: Hasher>(&self, state: &mut H) {
-        (self.exponent.to_bits(), self.bias.to_bits(), self.packing_tolerance, self.thin_casters).hash(state);
+        (
+            self.exponent.to_bits(),
+            self.bias.to_bits(),
+            self.packing_tolerance,
+            self.thin_casters,
+            self.standard_fallback,
+        )
+            .hash(state);
     }
 }
 
@@ -98,8 +163,9 @@ fn constants(options: &SpsmOptions) -> String {
     // meaningless; the paper's 5 stands in.
     let exponent = if options.exponent.is_finite() && options.exponent > 0.0 { options.exponent } else { 5.0 };
     let bias = if options.bias.is_finite() { options.bias } else { 0.0 };
+    let fallback = options.standard_fallback.paths();
     format!(
-        "const SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\n",
+        "const SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\nconst SPSM_FALLBACK: u32 = {fallback}u;\n",
         if options.packing_tolerance { 1.0f32 } else { 0.0 },
         options.thin_casters
     )
