@@ -30,6 +30,9 @@ pub(super) const REPORT_FILES: [&str; 9] = [
 
 const LOCK_FILE: &str = ".lixel.lock";
 
+/// How long a run waits for a report directory's lock before it refuses.
+const LOCK_PATIENCE: std::time::Duration = std::time::Duration::from_secs(1);
+
 pub(super) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
     move |source| ExperimentError::Io { path: path.to_path_buf(), source }
 }
@@ -81,10 +84,18 @@ impl RunDir {
             .truncate(false)
             .open(&lock_path)
             .map_err(io(&lock_path))?;
-        if FileExt::try_lock(&file).is_err() {
-            let mut text = String::new();
-            let _ = file.read_to_string(&mut text);
-            return Err(ExperimentError::Locked { dir: path.to_path_buf(), pid: text.trim().parse().ok() });
+        // A lock held only by a child this process is spawning (its copy of
+        // the descriptor lives from fork to exec) or by a run that is just
+        // ending clears within milliseconds; a run that holds the directory
+        // keeps it. So a refusal waits out LOCK_PATIENCE first.
+        let asked = std::time::Instant::now();
+        while FileExt::try_lock(&file).is_err() {
+            if asked.elapsed() >= LOCK_PATIENCE {
+                let mut text = String::new();
+                let _ = file.read_to_string(&mut text);
+                return Err(ExperimentError::Locked { dir: path.to_path_buf(), pid: text.trim().parse().ok() });
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
         }
         // The holder's PID, for the message a second run gets.
         let record = file
