@@ -6,13 +6,13 @@
 //! One configuration (a light position) runs:
 //!
 //! 1. ground truth: a ray from every visible pixel's surface point to the
-//!    light against all triangles ([`RayCaster`]), and/or the paper's
+//!    light against all triangles ([`RayCaster`](crate::mesh::RayCaster)), and/or the paper's
 //!    focused 4000² map;
 //! 2. every method's matrix (scene-optimized ones through the frame loop at
 //!    the fixed configuration until the optimizer stops switching);
 //! 3. the camera pass's full-resolution masks; a pixel counts when it is
 //!    visible, on a receiver facing the light, and its bit differs from the
-//!    truth. One bias policy ([`ShadowBias`]'s
+//!    truth. One bias policy ([`ShadowBias`](crate::render::ShadowBias)'s
 //!    default) serves every method.
 
 mod batch;
