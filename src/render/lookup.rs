@@ -13,7 +13,7 @@
 
 use std::borrow::Cow;
 
-use super::passes::{AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SHADOW_SLOTS};
+use super::passes::{storage_entry, AnalysisPass, CameraPass, SceneLayouts, DEPTH_FORMAT, MAX_SHADOW_SLOTS};
 use super::sgsm::gpu::{SgsmMaps, SweepPass};
 use super::sgsm::{self, SgsmOptions};
 use super::spsm::{self, SpsmOptions};
@@ -193,31 +193,13 @@ impl LookupState {
         }
         if spec.pulls_vertices {
             // SPSM's centre-sampled depths (CentreDepths), read by the lookup.
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: 4,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            });
+            entries.push(storage_entry(4, wgpu::ShaderStages::FRAGMENT, true, false));
         }
         let sweep = spec.sgsm.map(|options| SweepPass::new(device, &options));
         if let Some(sweep) = &sweep {
             entries.push(map_entry(2, wgpu::TextureSampleType::Uint));
             if sweep.counters.is_some() {
-                entries.push(wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                });
+                entries.push(storage_entry(3, wgpu::ShaderStages::FRAGMENT, false, false));
             }
         }
         let maps_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -350,16 +332,7 @@ impl ShadowPass {
         unclipped_available: bool,
         pulled: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::VERTEX,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let storage = |binding| storage_entry(binding, wgpu::ShaderStages::VERTEX, true, false);
         let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
@@ -380,16 +353,7 @@ impl ShadowPass {
         let centre_layout = pulled.is_some().then(|| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("lixel spsm centre depths layout"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: true,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                }],
+                entries: &[storage_entry(0, wgpu::ShaderStages::FRAGMENT, false, true)],
             })
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

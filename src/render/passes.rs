@@ -123,6 +123,25 @@ pub(crate) fn scene_pipeline(
     })
 }
 
+/// A storage-buffer entry of a bind group layout, seen by `visibility`.
+pub(crate) fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    read_only: bool,
+    has_dynamic_offset: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
 /// A pipeline drawing one full-screen triangle without vertex buffers
 /// (`entries`: the vertex and fragment entry points of `module`, e.g.
 /// `vs_fullscreen` in common.wgsl), writing `targets` and, with

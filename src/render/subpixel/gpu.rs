@@ -29,6 +29,7 @@ use super::bitmask::HalfPlaneTable;
 use super::reference::EdgeAdjacency;
 use super::AaSamples;
 use crate::mesh::Mesh;
+use crate::render::passes::storage_entry;
 use crate::render::{device, RenderError, Renderer};
 use crate::LightMatrix;
 
@@ -176,16 +177,7 @@ const ENTRY_POINTS: [&str; 8] = [
 ];
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
+    storage_entry(binding, wgpu::ShaderStages::COMPUTE, read_only, false)
 }
 
 fn uniform(binding: u32, dynamic: bool) -> wgpu::BindGroupLayoutEntry {

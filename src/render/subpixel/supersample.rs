@@ -30,7 +30,7 @@ use glam::{DMat4, DVec3};
 
 use super::{AaSamples, SAMPLE_POSITIONS};
 use crate::render::encode::CameraOutput;
-use crate::render::passes::CameraTargets;
+use crate::render::passes::{storage_entry, CameraTargets};
 use crate::render::uniforms::CameraRaw;
 use crate::render::{device, RenderError, Renderer};
 use crate::Camera;
@@ -127,16 +127,7 @@ impl SupersamplePass {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                storage_entry(2, wgpu::ShaderStages::COMPUTE, false, false),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
