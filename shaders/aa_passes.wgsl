@@ -71,9 +71,13 @@ struct AaParams {
     // 1: per-pixel box culling on (the default); 0: every entry of the
     // footprint's tiles is tested (the old rule, for tests).
     cull: u32,
+    // Index of the validity words in `occlusion` (after every light's
+    // occlusion words).
+    valid_base: u32,
+    // 1: the validity mask on (the default); 0: every sample valid (for
+    // tests).
+    validity: u32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 // a.w: 1 when the edge is a silhouette for every light (boundary or
@@ -457,20 +461,20 @@ fn half_space_mask(cols: array<vec4<f32>, 3>, h: vec4<f32>) -> u32 {
     return table_lookup(vec3<f32>(dot(cols[0], h), dot(cols[1], h), dot(cols[2], h)));
 }
 
-// The occluded samples of a facet (columns c0, c1, c2) by triangle t:
-// `facet::shadow_half_spaces` and `occluded_mask` for one triangle.
-fn triangle_mask(t: u32, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32, point: vec3<f32>) -> u32 {
-    // In the facet's frame, centred on the pixel's point.
-    let v0 = vertex(t, 0u) - point;
-    let v1 = vertex(t, 1u) - point;
-    let v2 = vertex(t, 2u) - point;
+// The samples of a facet (columns c0, c1, c2) inside the shadow of the
+// triangle (v0, v1, v2) (in the facet's frame, centred on the pixel's point)
+// cast by the homogeneous point l: `facet::shadow_half_spaces` and
+// `occluded_mask` for one triangle. With l the light: the occluded samples;
+// with l the eye: the samples whose facet point the triangle hides from the
+// camera (their view rays meet it first).
+fn triangle_mask(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, cols: array<vec4<f32>, 3>, l: vec4<f32>, bias: f32) -> u32 {
     let normal = cross(v1 - v0, v2 - v0);
     let scale = length(normal);
     if !(scale > 0.0) {
         return 0u;
     }
-    // The triangle's own plane, facing away from the light and pushed away
-    // from it by the bias, first: it rejects most blockers behind the facet.
+    // The triangle's own plane, facing away from l and pushed away from it
+    // by the bias, first: it rejects most triangles behind the facet.
     let plane = vec4<f32>(normal, -dot(normal, v0));
     let towards = dot(plane, l);
     if towards == 0.0 {
@@ -752,6 +756,7 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     let bit = 1u << params.light;
     let standard = select(0u, ALL_SAMPLES, (words.y & bit) != 0u) & params.sample_mask;
     occlusion[params.light * pixels + id] = standard;
+    occlusion[params.valid_base + params.light * pixels + id] = params.sample_mask;
     if (words.z & bit) == 0u || bitcast<f32>(words.x) >= 1.0 {
         return;
     }
@@ -811,7 +816,11 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     // reconstructed point).
     let bias = params.bias + 0.01 * fp.diameter;
     let l = vec4<f32>(light.position.xyz - point * light.position.w, light.position.w);
+    // The eye in the facet's frame: a triangle between it and the facet
+    // hides the samples behind it (the paper's validity mask).
+    let e = vec4<f32>(eye, 1.0);
     var occluded = 0u;
+    var hidden = 0u;
     var tests = 0u;
     for (var ty = t.y; ty <= t.w; ty++) {
         for (var tx = t.x; tx <= t.z; tx++) {
@@ -824,14 +833,30 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
                     continue;
                 }
                 tests += 1u;
-                occluded |= triangle_mask(tri, facet.cols, l, bias, point);
+                let v0 = vertex(tri, 0u) - point;
+                let v1 = vertex(tri, 1u) - point;
+                let v2 = vertex(tri, 2u) - point;
+                occluded |= triangle_mask(v0, v1, v2, facet.cols, l, bias);
                 if (occluded & params.sample_mask) == params.sample_mask {
                     break;
+                }
+                if params.validity != 0u {
+                    hidden |= triangle_mask(v0, v1, v2, facet.cols, e, bias);
                 }
             }
         }
     }
     add_stat(STAT_EXACT, 1u);
     add_stat(STAT_TESTS, tests);
-    occlusion[params.light * params.width * params.height + id] = occluded & params.sample_mask;
+    let pixels = params.width * params.height;
+    let out = params.light * pixels + id;
+    occlusion[out] = occluded & params.sample_mask;
+    // Every sample occluded: visibility 0 whatever is valid (and the walk
+    // stopped early, in the lists' atomic order): all valid. Every sample
+    // hidden: no facet sample to trust; all valid (the occlusion as is).
+    var valid = ~hidden & params.sample_mask;
+    if (occluded & params.sample_mask) == params.sample_mask || valid == 0u {
+        valid = params.sample_mask;
+    }
+    occlusion[params.valid_base + out] = valid;
 }

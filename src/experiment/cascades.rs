@@ -106,6 +106,19 @@ impl Runner<'_> {
         Ok(words)
     }
 
+    /// The antialiased passes' validity words of the sun drawn in map slots
+    /// `0..slots`: a cascade that does not own a pixel leaves every sample
+    /// valid there, so their AND is the owning cascade's.
+    pub(super) fn validity(&self, slots: usize) -> Result<Vec<u32>, ExperimentError> {
+        let mut words = self.renderer.read_validity(0)?;
+        for k in 1..slots {
+            for (w, v) in words.iter_mut().zip(self.renderer.read_validity(k)?) {
+                *w &= v;
+            }
+        }
+        Ok(words)
+    }
+
     /// The supersampled lookup's words of the sun drawn in map slots
     /// `0..slots`: each sub-sample's camera pass sets a cascade's facing and
     /// shadow bits only where it owns the sub-sample, so the OR of the

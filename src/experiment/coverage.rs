@@ -194,6 +194,20 @@ impl VisibilityError {
         Self::of(|i| bitmask::visibility(occluded[i], samples), truth, coverage, samples)
     }
 
+    /// The error of the antialiased lookup's occlusion and validity words
+    /// ([`Renderer::read_validity`](crate::render::Renderer::read_validity)):
+    /// the share of valid samples not occluded.
+    #[must_use]
+    pub fn of_valid_occlusion(
+        occluded: &[u32],
+        valid: &[u32],
+        truth: &ShadowMasks,
+        coverage: &Coverage,
+        samples: AaSamples,
+    ) -> Self {
+        Self::of(|i| bitmask::visibility_of_valid(occluded[i], valid[i], samples), truth, coverage, samples)
+    }
+
     /// The error of a supersampled standard lookup
     /// ([`ShadowLookup::Supersampled`](crate::render::ShadowLookup::Supersampled)):
     /// its share of lit sub-samples among those facing the light, the

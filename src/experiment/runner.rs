@@ -410,11 +410,13 @@ impl<'a> Runner<'a> {
         coverage: Option<&Coverage>,
     ) -> Result<MethodResult, ExperimentError> {
         let samples = AaSamples::from_count(self.config.coverage_samples);
-        // `+aaN`: the renderer's occlusion words against the truth
-        // of the same N sub-samples; others: the shadow bit.
+        // `+aaN`: the renderer's occlusion words (over its valid
+        // samples) against the truth of the same N sub-samples; others:
+        // the shadow bit.
         let visibility = match (coverage, samples, method.lookup()) {
             (Some(c), Some(_), ShadowLookup::SubPixelAa(n)) => {
-                Some(VisibilityError::of_occlusion(&self.occlusion(matrices.len())?, truth, c, n))
+                let (occluded, valid) = (self.occlusion(matrices.len())?, self.validity(matrices.len())?);
+                Some(VisibilityError::of_valid_occlusion(&occluded, &valid, truth, c, n))
             }
             (Some(c), Some(_), ShadowLookup::Supersampled(n)) => {
                 Some(VisibilityError::of_supersampled(&self.supersampled(matrices.len())?, masks, truth, c, n))

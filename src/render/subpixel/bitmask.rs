@@ -151,6 +151,18 @@ pub fn visibility(occluded: u32, samples: AaSamples) -> f64 {
     1.0 - f64::from((occluded & samples.mask()).count_ones()) / f64::from(samples.count())
 }
 
+/// The share of the pattern's *valid* samples (bits of `valid`) that are not
+/// occluded (the paper's occlusion ratio with its validity mask); all of
+/// the pattern's samples when none is valid.
+#[must_use]
+pub fn visibility_of_valid(occluded: u32, valid: u32, samples: AaSamples) -> f64 {
+    let valid = valid & samples.mask();
+    if valid == 0 {
+        return visibility(occluded, samples);
+    }
+    1.0 - f64::from((occluded & valid).count_ones()) / f64::from(valid.count_ones())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -85,7 +85,9 @@ struct ParamsRaw {
     box_base: u32,
     queue_base: u32,
     cull: u32,
-    _pad: [u32; 3],
+    valid_base: u32,
+    validity: u32,
+    _pad: [u32; 1],
 }
 
 /// One mesh edge for the silhouette pass (`Edge` in the shader).
@@ -163,6 +165,8 @@ pub(crate) struct AaPass {
     /// Per-pixel culling of list entries by the triangles' boxes (on unless
     /// a test turns it off to compare).
     cull: bool,
+    /// The validity mask (on unless a test turns it off to compare).
+    validity: bool,
 }
 
 const ENTRY_POINTS: [&str; 8] = [
@@ -287,6 +291,7 @@ impl AaPass {
             last: None,
             capacity: PAIR_CAPACITY,
             cull: true,
+            validity: true,
         }
     }
 
@@ -337,7 +342,8 @@ impl AaPass {
                 u64::from(PAIR_CAPACITY) + 4 * triangles + pixels,
                 false,
             ),
-            occlusion: buffer("lixel aa occlusion words", pixels * lights, true),
+            // Every light's occlusion words, then every light's validity words.
+            occlusion: buffer("lixel aa occlusion and validity words", 2 * pixels * lights, true),
         });
     }
 
@@ -425,7 +431,9 @@ impl AaPass {
                 box_base: PAIR_CAPACITY,
                 queue_base: PAIR_CAPACITY + 4 * sized.triangles as u32,
                 cull: u32::from(self.cull),
-                _pad: [0; 3],
+                valid_base: (pixels * lights.len() as u64) as u32,
+                validity: u32::from(self.validity),
+                _pad: [0; 1],
             };
             queue.write_buffer(&self.params, i as u64 * PARAM_STRIDE, bytemuck::bytes_of(&raw));
             encoder.clear_buffer(&sized.map_words, 0, Some(4 * u64::from(mw) * u64::from(mh)));
@@ -478,6 +486,27 @@ impl Renderer {
         }
         let pixels = u64::from(last.width) * u64::from(last.height);
         self.read_buffer_words(&sized.occlusion, light as u64 * pixels, pixels)
+    }
+
+    /// Light `light`'s validity words of the last frame rendered with
+    /// [`ShadowLookup::SubPixelAa`](crate::render::ShadowLookup::SubPixelAa),
+    /// one per camera pixel as [`read_occlusion`](Self::read_occlusion)'s:
+    /// bit `s` set when sub-sample `s`'s facet point is seen by the camera,
+    /// i.e. no triangle of the pixel's lists lies between them (the paper's
+    /// validity mask). The pixel's visibility is the share of valid samples
+    /// not occluded ([`bitmask::visibility_of_valid`](super::bitmask::visibility_of_valid)).
+    /// Every pattern bit is set off the exact path, where every sample is
+    /// occluded, and where none would be valid. Blocks until done.
+    ///
+    /// # Errors
+    /// As [`read_occlusion`](Self::read_occlusion).
+    pub fn read_validity(&self, light: usize) -> Result<Vec<u32>, RenderError> {
+        let (last, sized) = self.aa_last()?;
+        if light >= last.lights {
+            return Err(RenderError::NoSuchLight { light, count: last.lights });
+        }
+        let pixels = u64::from(last.width) * u64::from(last.height);
+        self.read_buffer_words(&sized.occlusion, (last.lights + light) as u64 * pixels, pixels)
     }
 
     /// The counts of the antialiased passes for light `light` of the last
@@ -577,6 +606,20 @@ impl Renderer {
         self.ensure_aa()?;
         if let Some(aa) = self.aa.as_mut() {
             aa.cull = on;
+        }
+        Ok(())
+    }
+
+    /// Turns the validity mask of the antialiased lookup on (the default)
+    /// or off (every sample valid: the facet's plane answers for the whole
+    /// pixel), for comparisons.
+    ///
+    /// # Errors
+    /// As [`set_aa_footprint_culling`](Self::set_aa_footprint_culling).
+    pub fn set_aa_validity(&mut self, on: bool) -> Result<(), RenderError> {
+        self.ensure_aa()?;
+        if let Some(aa) = self.aa.as_mut() {
+            aa.validity = on;
         }
         Ok(())
     }
