@@ -3,7 +3,8 @@
 //! the triangle-tile pair count against a CPU count, and the per-pixel
 //! visibility against the ray-cast coverage truth on the tiny scene; the
 //! supersampled standard lookup (`ShadowLookup::Supersampled`, the cost
-//! baseline) against the same truth.
+//! baseline) against the same truth; the validity mask on a tetrahedron
+//! standing on the floor.
 
 #![cfg(all(feature = "render", feature = "cli"))]
 
@@ -401,4 +402,63 @@ fn supersampled_sample_counts_and_errors() {
         assert!(words.valid.contains(&samples.mask()), "{samples:?}: some pixel wholly facing the light");
     }
     assert!(renderer.read_supersampled(1).is_err());
+}
+
+/// The validity mask (Pan et al.'s Figure 7): a tetrahedron standing on the
+/// floor, 64x64 pixels and a 64² map (the experiment's framing of a scene
+/// file, its first light). Along the crease where the tetrahedron meets the
+/// floor, a floor pixel's facet runs on under the tetrahedron, whose faces
+/// shadow those facet points although the camera sees the tetrahedron's lit
+/// face there. Without the mask the antialiased lookup's error exceeded the
+/// standard lookup's (measured 0.0039 against 0.0032); with it, samples a
+/// listed triangle hides from the camera are left out of the ratio
+/// (measured 0.0012). The occlusion words are the same either way.
+#[test]
+fn validity_mask_keeps_crease_pixels_from_self_shadowing() {
+    use lixel::experiment::{camera_for, experiment_renderer_options, light_for, load_scene};
+    use lixel::experiment::{ExperimentConfig, Preset, SceneSource};
+    use lixel::{ShadowMapSize, ShadowProblem};
+    let Some((device, queue)) = gpu() else { return };
+    let dir = std::env::temp_dir().join(format!("lixel-render-aa-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("tetrahedron.obj");
+    std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    let config = ExperimentConfig {
+        scene: SceneSource::File { path, options: Default::default() },
+        screen: 64,
+        map: 64,
+        ..ExperimentConfig::preset(Preset::Quick)
+    };
+    let scene = load_scene(&config.scene).unwrap();
+    let cam = camera_for(&config, &scene).unwrap();
+    let light = light_for(&config, &scene, 0);
+    let m = ShadowProblem::new(cam, light, scene.bounds(), ShadowMapSize::square(64))
+        .and_then(|p| p.solve(&Parameterization::Focused))
+        .unwrap();
+    let caster = RayCaster::new(&scene);
+    let truth = caster.trace_masks(&cam, &[light], 64, 64);
+    let coverage = Coverage::trace(&caster, &cam, &light, &truth);
+    let mut renderer = Renderer::new(&device, &queue, &scene, experiment_renderer_options()).unwrap();
+    let lights = [m];
+    let frame = Frame { masks: true, lookup: AA32, ..Frame::new(&cam, &lights) };
+    renderer.set_aa_validity(false).unwrap();
+    renderer.render(&frame).unwrap();
+    let unmasked = renderer.read_occlusion(0).unwrap();
+    assert!(renderer.read_validity(0).unwrap().iter().all(|&v| v == u32::MAX), "validity off: every sample valid");
+    renderer.set_aa_validity(true).unwrap();
+    renderer.render(&frame).unwrap();
+    let masks = renderer.read_masks().unwrap();
+    let occlusion = renderer.read_occlusion(0).unwrap();
+    let valid = renderer.read_validity(0).unwrap();
+    assert_eq!(occlusion, unmasked, "the mask changes no occlusion word");
+    let hidden: u32 = valid.iter().map(|v| (!v).count_ones()).sum();
+    let e_std = VisibilityError::of_masks(&masks, &truth, &coverage, AaSamples::X32).mean().unwrap();
+    let e_all = VisibilityError::of_occlusion(&occlusion, &truth, &coverage, AaSamples::X32).mean().unwrap();
+    let e_aa =
+        VisibilityError::of_valid_occlusion(&occlusion, &valid, &truth, &coverage, AaSamples::X32).mean().unwrap();
+    eprintln!("standard {e_std:.4}, aa32 without the mask {e_all:.4}, with it {e_aa:.4}; {hidden} hidden samples");
+    assert!(hidden > 50, "{hidden} hidden samples");
+    assert!(e_aa < 0.5 * e_std, "aa32 {e_aa} against standard {e_std}");
+    assert!(e_aa < 0.5 * e_all, "aa32 {e_aa} against {e_all} without the mask");
+    let _ = std::fs::remove_dir_all(&dir);
 }
