@@ -14,6 +14,7 @@ mod support;
 use glam::{DVec3, UVec2, Vec3};
 use lixel::experiment::{Coverage, VisibilityError};
 use lixel::mesh::{primitives, Mesh, RayCaster, Role, Scene, SceneObject};
+use lixel::render::subpixel::bitmask::visibility_of_valid;
 use lixel::render::subpixel::AaSamples;
 use lixel::render::{Frame, Renderer, RendererOptions, ShadowLookup};
 use lixel::{Camera, Light, Parameterization, ShadowMapSize, ShadowProblem};
@@ -65,12 +66,13 @@ fn run() -> Result<(), String> {
     renderer.render(&frame).map_err(|e| e.to_string())?;
     let masks = renderer.read_masks().map_err(|e| e.to_string())?;
     let occlusion = renderer.read_occlusion(0).map_err(|e| e.to_string())?;
+    let valid = renderer.read_validity(0).map_err(|e| e.to_string())?;
     let caster = RayCaster::new(&scene);
     let truth = caster.trace_masks(&camera, &[light], size, size);
     let coverage = Coverage::trace(&caster, &camera, &light, &truth);
     let samples = AaSamples::X32;
     let standard = VisibilityError::of_masks(&masks, &truth, &coverage, samples);
-    let aa = VisibilityError::of_occlusion(&occlusion, &truth, &coverage, samples);
+    let aa = VisibilityError::of_valid_occlusion(&occlusion, &valid, &truth, &coverage, samples);
     let mean = |e: VisibilityError| e.mean().unwrap_or(f64::NAN);
     println!("mean visibility error: standard {:.4}, aa32 {:.4}", mean(standard), mean(aa));
     // Grey levels by visibility; pixels the truth does not count are dark.
@@ -84,7 +86,7 @@ fn run() -> Result<(), String> {
     let counted = |i: usize| coverage.visibility(i, samples).is_some();
     let images = [
         panel(&|i| counted(i).then(|| if masks.shadow[i] & 1 != 0 { 0.0 } else { 1.0 })),
-        panel(&|i| counted(i).then(|| 1.0 - f64::from(occlusion[i].count_ones()) / 32.0)),
+        panel(&|i| counted(i).then(|| visibility_of_valid(occlusion[i], valid[i], samples))),
         panel(&|i| coverage.visibility(i, samples)),
     ];
     support::montage(&images, 3).save(&out).map_err(|e| e.to_string())?;

@@ -114,8 +114,11 @@ impl Coverage {
 /// triangle's geometric normal, cut by the view rays of the 32 sub-samples,
 /// each facet point tested with a shadow ray. This is what the antialiased
 /// lookup computes when it finds every blocker (exact pairs, no table
-/// rounding): its error against [`Coverage`] is the facet approximation's
-/// own, the floor under any GPU implementation of it. Bit `s` set: occluded;
+/// rounding) and counts every sample as valid: its error against
+/// [`Coverage`] is the facet approximation's own without the validity mask
+/// (the GPU lookup's mask, [`Renderer::read_validity`](crate::render::Renderer::read_validity),
+/// leaves out samples whose facet point another surface hides from the
+/// camera, and may end below it). Bit `s` set: occluded;
 /// pixels not counted, or whose plane is seen edge-on (no facet), hold the
 /// centre's shadow bit in every bit.
 #[must_use]

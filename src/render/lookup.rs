@@ -43,8 +43,9 @@ pub enum ShadowLookup {
     /// Sub-pixel antialiased shadows (Pan et al. 2009; see
     /// [`subpixel`](super::subpixel)): the depth compare's maps and shadow
     /// bit, plus compute passes after the camera pass that give every pixel
-    /// an occlusion word over the pattern's sub-samples
-    /// ([`Renderer::read_occlusion`](super::Renderer::read_occlusion)).
+    /// an occlusion word and a validity word over the pattern's sub-samples
+    /// ([`Renderer::read_occlusion`](super::Renderer::read_occlusion),
+    /// [`Renderer::read_validity`](super::Renderer::read_validity)).
     SubPixelAa(AaSamples),
     /// Brute-force supersampling of the standard lookup, the baseline the
     /// antialiased lookup is measured against (see

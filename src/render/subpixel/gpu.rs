@@ -9,8 +9,10 @@
 //! the depth compare (its shadow bit, colour and masks are the standard
 //! lookup's) and adds, per light: the silhouette mask and its summed-area
 //! table, triangle lists of the tiles near silhouettes, and the per-pixel
-//! facet visibility. [`Renderer::read_occlusion`] reads the words back;
-//! [`Renderer::read_aa_stats`] the per-light counts.
+//! facet visibility: occlusion words and, as in the paper, validity words
+//! (samples whose facet point a listed triangle hides from the camera do not
+//! count). [`Renderer::read_occlusion`] and [`Renderer::read_validity`] read
+//! them back; [`Renderer::read_aa_stats`] the per-light counts.
 //!
 //! **Overflow policy**: the triangle–tile lists hold at most
 //! [`PAIR_CAPACITY`] entries per light; a pixel whose footprint touches a
