@@ -244,5 +244,10 @@ mod tests {
         assert_eq!(visibility(0xFFFF_FF00, AaSamples::X8), 1.0);
         assert_eq!(visibility(0x0000_000F, AaSamples::X8), 0.5);
         assert_eq!(visibility(u32::MAX, AaSamples::X32), 0.0);
+        // Over the valid samples only; all of the pattern's when none is valid.
+        assert_eq!(visibility_of_valid(0x0000_000F, 0x0000_00F0, AaSamples::X8), 1.0);
+        assert_eq!(visibility_of_valid(0x0000_0013, 0x0000_000F, AaSamples::X8), 0.5);
+        assert_eq!(visibility_of_valid(0x0000_000F, 0xFFFF_FF00, AaSamples::X8), 0.5);
+        assert!((visibility_of_valid(0x0000_0003, 0x0000_0007, AaSamples::X32) - 1.0 / 3.0).abs() < 1e-12);
     }
 }
