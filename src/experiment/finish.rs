@@ -74,10 +74,11 @@ pub(super) fn finish(
     }
     let lap = Instant::now();
     let equivalence = equivalence(runners, config)?;
+    let equivalence_done = Instant::now();
+    let pictures = extremes(runners, config, rows)?;
     let runner = runners.first_mut().ok_or_else(|| ExperimentError::Config("no runner".into()))?;
-    let lap = runner.stages.lap(RunStage::Equivalence, lap);
-    let pictures = extremes(runner, config, rows)?;
-    runner.stages.lap(RunStage::Pictures, lap);
+    runner.stages.add(RunStage::Equivalence, equivalence_done - lap);
+    runner.stages.lap(RunStage::Pictures, equivalence_done);
     let mut summary = report::summarize(config, rows, equivalence, started.elapsed(), warnings);
     summary.stages = runner.stages().clone();
     summary.missing.clone_from(&completeness.missing);
@@ -137,7 +138,7 @@ fn equivalence(runners: &mut [Runner<'_>], config: &ExperimentConfig) -> Result<
 /// For every method: its best, median and worst configuration re-run, with
 /// the errors overlaid.
 fn extremes(
-    runner: &mut Runner<'_>,
+    runners: &mut [Runner<'_>],
     config: &ExperimentConfig,
     rows: &[ConfigRow],
 ) -> Result<Vec<Picture>, ExperimentError> {
@@ -159,12 +160,13 @@ fn extremes(
     let mut configs: Vec<usize> = picks.iter().map(|p| p.2).collect();
     configs.sort_unstable();
     configs.dedup();
-    let mut made: Vec<(usize, Picture)> = Vec::new();
-    for index in configs {
+    // One truth per configuration, the configurations spread over the workers.
+    let picture_of = |runner: &mut Runner<'_>, index: usize| -> Result<Vec<(usize, Picture)>, ExperimentError> {
         let light = light_for(config, runner.scene(), index);
         let (ray, focused) = runner.truths(light)?;
-        let Some(truth) = ray.or(focused) else { continue };
+        let Some(truth) = ray.or(focused) else { return Ok(Vec::new()) };
         let nearest = nearest_view_depth(runner.camera(), &truth);
+        let mut made = Vec::new();
         for (order, &(m, which, _)) in picks.iter().enumerate().filter(|(_, p)| p.2 == index) {
             let matrices = match runner.solve_method(m, light, config.single_map(), nearest) {
                 Ok((matrices, ..)) => matrices,
@@ -176,7 +178,13 @@ fn extremes(
             let image = error_overlay(&masks, &truth);
             made.push((order, Picture { method: m, which, config: index, misclassified, image }));
         }
-    }
+        Ok(made)
+    };
+    let mut made: Vec<(usize, Picture)> = Vec::new();
+    workers::for_each(runners, &configs, picture_of, |_, pictures| {
+        made.extend(pictures);
+        Ok(())
+    })?;
     // Back in method order, best, median, worst.
     made.sort_by_key(|(order, _)| *order);
     let pictures: Vec<Picture> = made.into_iter().map(|(_, p)| p).collect();

@@ -24,7 +24,7 @@ pub(super) const BYTES_PER_TRIANGLE: u64 = 400;
 /// Host bytes per triangle of each worker beyond the first (`--jobs`): its
 /// own vertex and index buffers (host memory on software renderers). The
 /// mesh and ray caster are shared.
-pub(super) const WORKER_BYTES_PER_TRIANGLE: u64 = 160;
+pub(super) const WORKER_BYTES_PER_TRIANGLE: u64 = 200;
 
 /// Host bytes per screen pixel of each worker beyond the first: its truth
 /// and masks of the configuration in flight, its render targets, the
