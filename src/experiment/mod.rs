@@ -545,8 +545,7 @@ pub fn run(
     let done_here = |w: &rows::ConfigWriter| indices.iter().filter(|i| w.done().contains(i)).count();
     progress(Progress { done: done_here(&writer), total: indices.len(), zero_pixels: None });
     let loop_start = Instant::now();
-    // Rows go to the journal as configurations finish (in any order with
-    // several workers); the report sorts them.
+    // Rows go to the journal in configuration order, whatever the workers.
     workers::for_each(&mut runners, &todo, Runner::run_config, |&index, outcome: ConfigOutcome| {
         writer.append(index, &outcome)?;
         let counted = outcome.results.iter().filter_map(|(_, r)| r.counts).map(|c| c.counted).max();

@@ -17,6 +17,7 @@
 //! the report sorts them. The resolution equivalence also spreads its
 //! configurations over the workers and sums in configuration order.
 
+use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -64,10 +65,12 @@ pub(super) fn runners<'a>(
 }
 
 /// Runs `work` on every item, each runner on its own thread taking the
-/// next item when it is free (one runner: on this thread, in order), and
-/// hands each result to `done` on this thread as it arrives. The first
-/// error (of `work` or `done`) stops the workers from taking more items and
-/// is returned once every worker stopped.
+/// next item when it is free (one runner: on this thread), and hands the
+/// results to `done` on this thread in item order, each as soon as it and
+/// every earlier one are in (so progress, warnings and the journal come in
+/// the order of one worker). The first error (of `work` or `done`) stops
+/// the workers from taking more items and is returned once every worker
+/// stopped.
 ///
 /// # Errors
 /// The first error.
@@ -107,10 +110,26 @@ where
         }
         drop(sender);
         let mut first_error = None;
+        // Results that came before an earlier one, by item index.
+        let mut waiting = BTreeMap::new();
+        let mut expected = 0;
         for (i, result) in results {
-            if let Err(e) = result.and_then(|r| done(&items[i], r)) {
-                stop.store(true, Ordering::Relaxed);
-                first_error.get_or_insert(e);
+            match result {
+                Ok(r) => {
+                    waiting.insert(i, r);
+                }
+                Err(e) => {
+                    stop.store(true, Ordering::Relaxed);
+                    first_error.get_or_insert(e);
+                }
+            }
+            while first_error.is_none() {
+                let Some(r) = waiting.remove(&expected) else { break };
+                if let Err(e) = done(&items[expected], r) {
+                    stop.store(true, Ordering::Relaxed);
+                    first_error = Some(e);
+                }
+                expected += 1;
             }
         }
         first_error.map_or(Ok(()), Err)
