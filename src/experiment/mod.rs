@@ -512,7 +512,9 @@ pub fn light_for(config: &ExperimentConfig, scene: &Scene, index: usize) -> Ligh
 /// machine's memory, the report directory is locked, a previous report in
 /// it is refused (or moved aside with `force`), and `resume` checks the
 /// recorded identity. With a [`Shard`], only its configurations run and the
-/// report directory holds them for [`merge`].
+/// report directory holds them for [`merge`]. [`ExperimentConfig::jobs`]
+/// configurations run at once, the further workers on devices opened on
+/// `device`'s adapter; the report is the same for any number.
 ///
 /// # Errors
 /// Scene, renderer and I/O failures; every refusal above; and
