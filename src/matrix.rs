@@ -360,7 +360,9 @@ impl Placement<'_> {
 
     /// Adds the depth row to a homography whose third row is the unit axis;
     /// `focus_light` are the focus points (or their extreme rays) in light
-    /// coordinates.
+    /// coordinates. Here `focus` and `depth_points` are read only as one
+    /// sequence of depth points, `focus` first (the optimizer passes its
+    /// bodies' vertices and its relevant samples so).
     pub(crate) fn finish(&self, homography: DMat3, focus_light: &[DVec3]) -> LightMatrix {
         let j = homography.row(2);
         let t_rows = self.frame.light_from_world_3x4_rows();

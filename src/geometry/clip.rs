@@ -48,12 +48,15 @@ impl ClipWorkspace {
     }
 }
 
-/// Where a vertex lies relative to a clipping plane, with tolerance.
+/// Where a vertex lies relative to a clipping plane, with tolerance. The
+/// discriminants are distinct bits, so that or-ing a face's sides tells at
+/// once whether the plane cuts it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 enum Side {
-    Inside,
-    On,
-    Outside,
+    Inside = 1,
+    On = 2,
+    Outside = 4,
 }
 
 impl Side {
@@ -100,8 +103,9 @@ impl ConvexPolyhedron {
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
         side.clear();
-        // How many vertices lie inside, on and outside the plane.
-        let mut count = [0usize; 3];
+        // How many vertices lie inside, on and outside the plane (indexed
+        // by the side's bit).
+        let mut count = [0usize; 5];
         side.extend(dist.iter().map(|&d| {
             let s = Side::of(d, eps);
             count[s as usize] += 1;
@@ -138,6 +142,26 @@ impl ConvexPolyhedron {
             let start = indices.len();
             let along_start = along.len();
             let loop_indices = &self.indices[face.start..face.end];
+            // The sides present in the face: the plane cuts it only when it
+            // has vertices strictly on both sides. Otherwise the edge scan
+            // below would make no cut point and note no plane edge: a face
+            // with nothing outside is kept as it is (renumbered), and one
+            // with nothing strictly inside is dropped.
+            // (The reference path scans every face.)
+            let present = if reference { 0xff } else { loop_indices.iter().fold(0u8, |m, &a| m | side[a] as u8) };
+            let has_inside = present & Side::Inside as u8 != 0;
+            if present & Side::Outside as u8 == 0 {
+                if has_inside && loop_indices.len() >= 3 {
+                    indices.extend(loop_indices.iter().map(|&a| new_index[a]));
+                    faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+                } else {
+                    dropped_inside |= has_inside;
+                }
+                continue;
+            }
+            if !has_inside {
+                continue;
+            }
             let mut keeps_inside = false;
             // The last cut pushed, if it is the last index pushed.
             let mut last_cut = usize::MAX;
