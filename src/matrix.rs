@@ -346,11 +346,14 @@ impl Placement<'_> {
         // Checked again as a renderer will evaluate it, in world coordinates:
         // composing `G` with a far light's translation can round differently.
         let slack = self.tolerances.coverage_slack;
+        // `covers` and the depth test on one projection.
         let held = |p: &DVec3| {
-            matrix.covers(*p, slack)
-                && matrix
-                    .project(*p)
-                    .is_some_and(|ndc| ndc.z <= 1.0 + slack && (ndc.z >= -slack || matrix.needs_unclipped_depth))
+            matrix.project(*p).is_some_and(|ndc| {
+                ndc.x.abs() <= 1.0 + slack
+                    && ndc.y.abs() <= 1.0 + slack
+                    && ndc.z <= 1.0 + slack
+                    && (ndc.z >= -slack || matrix.needs_unclipped_depth)
+            })
         };
         if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(held)) {
             return Err(LixelError::NotInFront { method: self.method });

@@ -228,7 +228,7 @@ impl ConvexPolyhedron {
             indices.extend_from_slice(cycle);
             faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
         };
-        if reference || !walker.trace_simple(cap) {
+        if reference || !walker.trace_simple(vertices.len(), cap) {
             walker.walk(vertices.len(), |cycle| {
                 let start = indices.len();
                 indices.extend_from_slice(cycle);
@@ -429,21 +429,22 @@ impl LoopWalker {
     /// which every vertex has one edge out: hands `emit` the loop the walk
     /// would (from the first edge's start on) and returns `true`. Returns
     /// `false`, emitting nothing, for any other boundary (the caller then
-    /// walks it).
-    pub(super) fn trace_simple(&mut self, mut emit: impl FnMut(&[usize])) -> bool {
-        let Self { boundary, path, .. } = self;
+    /// walks it). `vertex_count` bounds the vertex indices (larger ones, from
+    /// no clip, also take the walk).
+    pub(super) fn trace_simple(&mut self, vertex_count: usize, mut emit: impl FnMut(&[usize])) -> bool {
+        let Self { boundary, path, left: next, .. } = self;
         let k = boundary.len();
         if k == 0 {
             return true;
         }
-        // The searches below are quadratic: long boundaries take the walk.
-        if k > 32 {
-            return false;
-        }
-        for i in 1..k {
-            let from = boundary[i].0;
-            if boundary[..i].iter().any(|e| e.0 == from) {
-                return false;
+        // Each vertex's one edge out, by vertex: a second edge out of the
+        // same vertex means the boundary is not one simple cycle.
+        next.clear();
+        next.resize(vertex_count, usize::MAX);
+        for &(from, to) in boundary.iter() {
+            match next.get_mut(from) {
+                Some(slot) if *slot == usize::MAX && to != usize::MAX => *slot = to,
+                _ => return false,
             }
         }
         path.clear();
@@ -451,7 +452,7 @@ impl LoopWalker {
         let mut v = start;
         loop {
             path.push(v);
-            let Some(&(_, w)) = boundary.iter().find(|e| e.0 == v) else {
+            let Some(&w) = next.get(v).filter(|&&w| w != usize::MAX) else {
                 return false;
             };
             if w == start {
