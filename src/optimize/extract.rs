@@ -315,7 +315,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     for y in 0..h {
         let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
         let row = m.y_axis * sy;
-        for x in 0..w {
+        for (x, &(sx, column)) in columns.iter().enumerate() {
             let i = y * w + x;
             if !grid.depth[i].is_finite() {
                 continue;
@@ -331,7 +331,6 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 continue;
             }
             let d = grid.depth[i];
-            let (sx, column) = columns[x];
             let here = unproject(column, row, d);
             if !(here.w > 0.0) || !here.is_finite() {
                 for bit in set_bits(active) {
