@@ -295,42 +295,34 @@ pub(super) fn half_edge_faces(map: &mut IndexMap<(usize, usize), usize>, faces: 
     }
 }
 
-/// The directed edges of a body's faces grouped by start vertex (counting
-/// sort, no hashing): the face of edge `a → b` is found among the few edges
-/// leaving `a`.
+/// The directed edges of a body's faces chained by start vertex (no
+/// hashing, one pass): the face of edge `a → b` is found among the few edges
+/// leaving `a`, latest first.
 #[derive(Clone, Debug, Default)]
 pub(super) struct HalfEdges {
-    /// Edges leaving vertex `a`: `to_face[start[a]..start[a + 1]]`.
-    start: Vec<usize>,
-    /// `(b, face)` per directed edge `a → b`, in face order within each `a`.
-    to_face: Vec<(usize, usize)>,
+    /// Per vertex, the last directed edge leaving it (`usize::MAX`: none).
+    head: Vec<usize>,
+    /// `(b, face, the previous edge leaving a)` per directed edge `a → b`,
+    /// in face order.
+    edges: Vec<(usize, usize, usize)>,
 }
 
 impl HalfEdges {
     /// Rebuilds for `faces` over `vertex_count` vertices.
     pub(super) fn build(&mut self, vertex_count: usize, faces: &[FaceSpan], indices: &[usize]) {
-        // Every index is a vertex of the body; the bound only keeps a
-        // malformed body from indexing out of range.
-        let vertex_count = indices.iter().map(|&i| i + 1).max().unwrap_or(0).max(vertex_count);
-        let start = &mut self.start;
-        start.clear();
-        start.resize(vertex_count + 2, 0);
-        for face in faces {
-            for (a, _) in loop_edges(&indices[face.start..face.end]) {
-                start[a + 2] += 1;
-            }
-        }
-        for i in 2..start.len() {
-            start[i] += start[i - 1];
-        }
-        // `start[a + 1]` is now where `a`'s edges begin; used as the fill
-        // cursor it ends where they end, i.e. where `a + 1`'s begin.
-        self.to_face.clear();
-        self.to_face.resize(start[vertex_count + 1], (0, 0));
+        let Self { head, edges } = self;
+        head.clear();
+        head.resize(vertex_count, usize::MAX);
+        edges.clear();
         for (f, face) in faces.iter().enumerate() {
             for (a, b) in loop_edges(&indices[face.start..face.end]) {
-                self.to_face[start[a + 1]] = (b, f);
-                start[a + 1] += 1;
+                // Every index is a vertex of the body; growing only keeps
+                // a malformed body from indexing out of range.
+                if a >= head.len() {
+                    head.resize(a + 1, usize::MAX);
+                }
+                edges.push((b, f, head[a]));
+                head[a] = edges.len() - 1;
             }
         }
     }
@@ -338,8 +330,14 @@ impl HalfEdges {
     /// The face of directed edge `a → b`; the last one listed if several
     /// faces run it (what a map filled in face order would hold).
     pub(super) fn face(&self, a: usize, b: usize) -> Option<usize> {
-        let range = self.start.get(a).copied()?..self.start.get(a + 1).copied()?;
-        self.to_face[range].iter().rev().find(|&&(to, _)| to == b).map(|&(_, face)| face)
+        let mut e = *self.head.get(a)?;
+        while let Some(&(to, face, previous)) = self.edges.get(e) {
+            if to == b {
+                return Some(face);
+            }
+            e = previous;
+        }
+        None
     }
 }
 
