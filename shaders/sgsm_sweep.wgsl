@@ -52,7 +52,8 @@ fn sgsm_fetch(k: vec2<i32>) -> SgsmStored {
 // (dy + 1) * 3 + dx + 1, as sgsm_slot_offset. Every texel a step reads (its
 // own, the 3x3 slots, the four corners' 2x2 texels) lies in it, so a step
 // decodes only the three texels of the column entering the window instead
-// of ~30 (the sweep was most of SGSM's shadow-stage time on lavapipe).
+// of ~30. Same words bit for bit; on lavapipe the frame time did not change
+// measurably (issue 17 note, session 6): the sweep is not SGSM's main cost.
 var<private> sgsm_window: array<SgsmStored, 9>;
 var<private> sgsm_window_centre: vec2<i32>;
 
