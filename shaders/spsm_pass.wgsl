@@ -262,12 +262,11 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
         spsm_store_centre(in, c);
     }
-    let slopes = g * shadow_pass.clamp.yz;
     out.texel = vec4<u32>(
         spsm_pack_offset(in.t0 - c),
         spsm_pack_offset(in.t1 - c),
         spsm_pack_offset(in.t2 - c),
-        (spsm_encode_depth(zeta_c) << 16u) | ((spsm_encode_slope(slopes.x) + 1u) << 8u) | (spsm_encode_slope(slopes.y) + 1u),
+        (spsm_encode_depth(zeta_c) << 16u) | spsm_encode_gradient(g, shadow_pass.clamp.yz),
     );
     out.depth = spsm_depth_key(min_depth);
     return out;

@@ -196,7 +196,7 @@ fn gpu_sweep_matches_the_cpu_reference() {
         let (w, h) = (matrix.map_size.width, matrix.map_size.height);
         let words = renderer.read_map_words(light).unwrap().unwrap();
         let lixel::render::sgsm::SgsmWords { normals, masks } = renderer.read_sgsm_words(light).unwrap().unwrap();
-        let map = SweepMap::new(&words, &normals, w, h, 5.0);
+        let map = SweepMap::new(&words, &normals, w, h, SpsmOptions::PAPER.gradient_code);
         let cpu = map.sweep();
         let mut by_status = [0usize; 4];
         let (mut differ, mut tie_breaks) = (0, 0);

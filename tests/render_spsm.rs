@@ -86,7 +86,7 @@ fn conservative_coverage_matches_the_cpu_reference() {
                 // The floor lies under everything but is clipped to the shapes' test below.
                 let surely = projected.iter().any(|t| packing::texel_touches(*t, [x, y], -1e-3));
                 let maybe = projected.iter().any(|t| packing::texel_touches(*t, [x, y], 1e-3));
-                let decoded = packing::unpack(words, [x as u32, y as u32], [w as u32, h as u32], 5.0);
+                let decoded = packing::unpack(words, [x as u32, y as u32], [w as u32, h as u32], SpsmOptions::PAPER.gradient_code);
                 let stored_shape = decoded.and_then(|d| {
                     projected.iter().position(|t| t.iter().zip(d.vertices).all(|(a, b)| (*a - b).length() < 0.05))
                 });
