@@ -201,7 +201,12 @@ pub fn pack(
         let d = (v - centre).clamp(DVec2::splat(-60000.0), DVec2::splat(60000.0));
         u32::from(half::f16::from_f64(d.x).to_bits()) | u32::from(half::f16::from_f64(d.y).to_bits()) << 16
     };
-    [half(vertices[0]), half(vertices[1]), half(vertices[2]), encode_depth(depth) << 16 | encode_gradient(gradient, map, code)]
+    [
+        half(vertices[0]),
+        half(vertices[1]),
+        half(vertices[2]),
+        encode_depth(depth) << 16 | encode_gradient(gradient, map, code),
+    ]
 }
 
 /// Decodes a texel at `texel`; `None` without a triangle.
