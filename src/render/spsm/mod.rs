@@ -83,7 +83,11 @@ pub enum StandardFallback {
     /// triangle containing p, or from p's own plane, stay SPSM's. Measured
     /// per path on the default preset (issue-16 note, session 5): the
     /// recovery's and the uniform patterns' verdicts were worse than the
-    /// standard's, the triangle paths' better.
+    /// standard's, the triangle paths' better. Also the depth-only texels
+    /// (triangles crossing the light's `w = 0` plane, e.g. a floor under a
+    /// PSM-like warp; session 6): their 16-bit `z / w` with a constant
+    /// bias showed as acne (quick preset, configuration 1: `psm+spsm`
+    /// 3137 misclassified, mostly false shadow, against `psm`'s 373).
     #[default]
     Uncertain,
     /// The standard verdict everywhere: the standard lookup computed from
@@ -100,9 +104,9 @@ impl StandardFallback {
     fn paths(self) -> u32 {
         match self {
             Self::Off => 0,
-            // SPSM_PATH_UNIFORM | SPSM_PATH_RECOVER
-            Self::Uncertain => 16 | 32,
-            Self::Always => 0xff,
+            // SPSM_PATH_UNIFORM | SPSM_PATH_RECOVER | SPSM_PATH_DEPTH_ONLY
+            Self::Uncertain => 16 | 32 | 256,
+            Self::Always => 0xffff,
         }
     }
 }
