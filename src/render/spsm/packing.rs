@@ -32,8 +32,8 @@ pub fn decode_depth(code: u32) -> f64 {
 ///
 /// Why two (issue 16, session 6): the paper's power code (eq. 3) spends its
 /// 254 levels per axis on steep slopes and has a dead zone around zero:
-/// with exponent 5 every slope below ~0.4 of the depth range per map
-/// extent (1e-3 per texel on a 400² map) decodes to 0, and the packing
+/// with exponent 5 every slope below ~0.55 of the depth range per map
+/// extent (1.4e-3 per texel on a 400² map) decodes to 0, and the packing
 /// tolerance grows accordingly. The scene-optimized matrices squeeze the
 /// receivers' depths into a narrow band (default preset, configuration 5:
 /// `zeta` in [0.91, 0.96], slopes ~4.5e-4 per texel), so every stored plane
@@ -41,7 +41,7 @@ pub fn decode_depth(code: u32) -> f64 {
 /// larger than the caster-receiver gaps (~1e-3): whole shadow interiors
 /// came out lit. [`Self::LogPolar`] keeps the same relative precision at
 /// every slope instead.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub enum GradientCode {
     /// The paper's eq. (3) per axis: `Q(d) = 127 (1 + a^n)`,
@@ -57,13 +57,8 @@ pub enum GradientCode {
     /// bound: 4.9% of the magnitude (half a magnitude step plus half a
     /// direction step; [`gradient_error`]), 1e-7 per texel below the range.
     /// The default.
+    #[default]
     LogPolar,
-}
-
-impl Default for GradientCode {
-    fn default() -> Self {
-        Self::LogPolar
-    }
 }
 
 /// Smallest nonzero gradient magnitude of [`GradientCode::LogPolar`], zeta per texel.
@@ -371,7 +366,7 @@ mod tests {
             let err = (decode_gradient(bits, [400, 400], code) - g).abs();
             let bound = gradient_error(bits, [400, 400], code);
             assert!(err.cmple(bound * 1.000_001).all(), "{g}: error {err}, bound {bound}");
-            if m >= LOG_MIN && m <= LOG_MAX {
+            if (LOG_MIN..=LOG_MAX).contains(&m) {
                 assert!(bound.x <= 0.05 * m, "relative bound {}", bound.x / m);
             }
         }
