@@ -144,6 +144,12 @@ struct ExperimentArgs {
     /// export it (Kubernetes Indexed Jobs: the Job's completions).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     shard_count: Option<u64>,
+    /// Configurations run at once, each on a device of its own (a second
+    /// lavapipe queue thread; on a GPU, one configuration's CPU work overlaps
+    /// another's rendering). Default: the cores, at most 2, as many as
+    /// memory allows. Results are the same for every value.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    jobs: Option<u64>,
     /// Measure the frame-time table (the paper's Table 2) instead.
     #[arg(long)]
     timing: bool,
@@ -326,6 +332,7 @@ fn experiment_config(args: &ExperimentArgs) -> Result<ExperimentConfig, String> 
     c.resume = args.resume;
     c.force = args.force;
     c.shard = shard(args)?;
+    c.jobs = args.jobs.map_or(0, |j| usize::try_from(j).unwrap_or(usize::MAX));
     experiment::check_cascades(&c).map_err(|e| e.to_string())?;
     Ok(c)
 }

@@ -346,11 +346,14 @@ impl Placement<'_> {
         // Checked again as a renderer will evaluate it, in world coordinates:
         // composing `G` with a far light's translation can round differently.
         let slack = self.tolerances.coverage_slack;
+        // `covers` and the depth test on one projection.
         let held = |p: &DVec3| {
-            matrix.covers(*p, slack)
-                && matrix
-                    .project(*p)
-                    .is_some_and(|ndc| ndc.z <= 1.0 + slack && (ndc.z >= -slack || matrix.needs_unclipped_depth))
+            matrix.project(*p).is_some_and(|ndc| {
+                ndc.x.abs() <= 1.0 + slack
+                    && ndc.y.abs() <= 1.0 + slack
+                    && ndc.z <= 1.0 + slack
+                    && (ndc.z >= -slack || matrix.needs_unclipped_depth)
+            })
         };
         if !(matrix.clip_from_world.is_finite() && self.focus.iter().all(held)) {
             return Err(LixelError::NotInFront { method: self.method });
@@ -360,7 +363,9 @@ impl Placement<'_> {
 
     /// Adds the depth row to a homography whose third row is the unit axis;
     /// `focus_light` are the focus points (or their extreme rays) in light
-    /// coordinates.
+    /// coordinates. Here `focus` and `depth_points` are read only as one
+    /// sequence of depth points, `focus` first (the optimizer passes its
+    /// bodies' vertices and its relevant samples so).
     pub(crate) fn finish(&self, homography: DMat3, focus_light: &[DVec3]) -> LightMatrix {
         let j = homography.row(2);
         let t_rows = self.frame.light_from_world_3x4_rows();

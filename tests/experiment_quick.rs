@@ -69,7 +69,7 @@ fn quick_preset_writes_a_consistent_report_deterministically_and_resumes() {
     use lixel::experiment::RunStage;
     assert!(report.contains("## Where the time went") && report.contains("| ground truth |"), "{report}");
     assert!(!summary.stages.get(RunStage::Truth).is_zero() && !summary.stages.get(RunStage::Lookups).is_zero());
-    assert!(summary.stages.total() <= summary.elapsed, "{:?} > {:?}", summary.stages, summary.elapsed);
+    assert!(summary.stages.wall() <= summary.elapsed, "{:?} > {:?}", summary.stages, summary.elapsed);
 
     // Same seed, same configs.csv; an interrupted run resumes to the same file.
     let c2 = config(&second);
@@ -113,5 +113,57 @@ fn lookup_suffixes_are_deterministic() {
         files.push(std::fs::read_to_string(dir.join(run).join("configs.csv")).unwrap());
     }
     assert!(files[0] == files[1], "two runs differ:\n{}\n{}", files[0], files[1]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Several configurations at once (`jobs`) change no result: the quick
+/// preset with 1 and 3 workers (4 configurations: uneven per worker; more
+/// workers than this machine's cores) writes the same `summary.csv`, `configs.csv`,
+/// equivalence figures and pictures, and the stage table says how many
+/// workers ran.
+#[test]
+fn workers_write_the_report_of_one_worker() {
+    let Some((device, queue)) = render_common::gpu() else { return };
+    let dir = std::env::temp_dir().join(format!("lixel-experiment-jobs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut summaries = Vec::new();
+    for jobs in [1, 3] {
+        let c = ExperimentConfig { jobs, configs: 4, equivalence_configs: 2, ..config(&dir.join(jobs.to_string())) };
+        summaries.push(experiment::run(&c, &device, &queue, &mut |_| {}).unwrap());
+    }
+    let read = |jobs: &str, file: &str| std::fs::read(dir.join(jobs).join(file)).unwrap();
+    for file in ["summary.csv", "configs.csv", "sorted-errors.png", "equivalence.png"] {
+        assert!(read("1", file) == read("3", file), "{file} differs between 1 and 3 workers");
+    }
+    let images = |jobs: &str| {
+        let mut names: Vec<_> = std::fs::read_dir(dir.join(jobs).join("images"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(images("1"), images("3"));
+    for name in images("1") {
+        assert!(read("1", &format!("images/{name}")) == read("3", &format!("images/{name}")), "{name} differs");
+    }
+    // The report up to its timing sections is the same text.
+    let head = |jobs: &str| {
+        let text = String::from_utf8(read(jobs, "report.md")).unwrap();
+        text.split("## Where the time went")
+            .next()
+            .unwrap()
+            .lines()
+            .filter(|l| !l.contains("Run time"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(head("1"), head("3"));
+    use lixel::experiment::RunStage;
+    let (one, three) = (&summaries[0].stages, &summaries[1].stages);
+    assert_eq!((one.workers(), three.workers()), (1, 3));
+    assert!(three.wall() <= summaries[1].elapsed && !three.get(RunStage::Lookups).is_zero());
+    let report = String::from_utf8(read("3", "report.md")).unwrap();
+    assert!(report.contains("| configurations (3 workers at once) |") && report.contains("worker-seconds"), "{report}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -175,7 +175,7 @@ fn the_command_line_names_each_invalid_flag() {
     }
     let (_, e) = run(&["--eye", "1,2"]);
     assert!(e.contains("--eye") && e.contains("three numbers"), "{e}");
-    for flag in ["--configs", "--screen", "--map"] {
+    for flag in ["--configs", "--screen", "--map", "--jobs"] {
         let (ok, e) = run(&[flag, "0"]);
         assert!(!ok && e.contains(flag), "{flag}: {e}");
     }

@@ -84,7 +84,7 @@ impl Runner<'_> {
         let view = LoopView {
             camera: &self.camera,
             lights: &lights,
-            bounds: self.scene.bounds(),
+            bounds: self.shared.scene.bounds(),
             map: ShadowMapSize::square(self.config.map),
         };
         let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;

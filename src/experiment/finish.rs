@@ -10,7 +10,10 @@ use std::time::Instant;
 use super::images::{error_overlay, Picture};
 use super::report::{self, Equivalence, Summary};
 use super::rows::ConfigRow;
-use super::{light_for, nearest_view_depth, Counts, ExperimentConfig, ExperimentError, MethodSpec, RunStage, Runner};
+use super::runner::means_in_order;
+use super::{
+    light_for, nearest_view_depth, workers, Counts, ExperimentConfig, ExperimentError, MethodSpec, RunStage, Runner,
+};
 
 /// How complete the rows of a report are.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -55,7 +58,7 @@ pub(super) fn check_counted(rows: &[ConfigRow], warnings: &mut Vec<String>) -> R
 /// Equivalence, pictures, summary and every report file in `dir`. A shard
 /// writes only its rows and a note (the merge does the rest).
 pub(super) fn finish(
-    runner: &mut Runner<'_>,
+    runners: &mut [Runner<'_>],
     config: &ExperimentConfig,
     dir: &Path,
     rows: &[ConfigRow],
@@ -70,10 +73,12 @@ pub(super) fn finish(
         return Ok(summary);
     }
     let lap = Instant::now();
-    let equivalence = equivalence(runner, config)?;
-    let lap = runner.stages.lap(RunStage::Equivalence, lap);
-    let pictures = extremes(runner, config, rows)?;
-    runner.stages.lap(RunStage::Pictures, lap);
+    let equivalence = equivalence(runners, config)?;
+    let equivalence_done = Instant::now();
+    let pictures = extremes(runners, config, rows)?;
+    let runner = runners.first_mut().ok_or_else(|| ExperimentError::Config("no runner".into()))?;
+    runner.stages.add(RunStage::Equivalence, equivalence_done - lap);
+    runner.stages.lap(RunStage::Pictures, equivalence_done);
     let mut summary = report::summarize(config, rows, equivalence, started.elapsed(), warnings);
     summary.stages = runner.stages().clone();
     summary.missing.clone_from(&completeness.missing);
@@ -88,7 +93,7 @@ pub(super) fn equivalence_count(config: &ExperimentConfig) -> usize {
 }
 
 /// The resolution-equivalence figures (empty when disabled).
-fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equivalence, ExperimentError> {
+fn equivalence(runners: &mut [Runner<'_>], config: &ExperimentConfig) -> Result<Equivalence, ExperimentError> {
     let count = equivalence_count(config);
     if count == 0 || !config.methods.contains(&MethodSpec::OPTIMIZED) {
         return Ok((Vec::new(), Vec::new()));
@@ -104,8 +109,22 @@ fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equ
         .collect();
     // The ladder's maps (up to 4000²) need one layer, not the shared
     // frame's one per method.
-    runner.renderer.release_maps();
-    let means = runner.means_at_resolutions(&runs, count)?;
+    for runner in runners.iter_mut() {
+        runner.renderer.release_maps();
+    }
+    // The configurations spread over the workers, summed in order.
+    let indices: Vec<usize> = (0..count).collect();
+    let mut per_config = vec![Vec::new(); count];
+    workers::for_each(
+        runners,
+        &indices,
+        |r, index| r.misclassified_at(&runs, index),
+        |&index, counts| {
+            per_config[index] = counts;
+            Ok(())
+        },
+    )?;
+    let means = means_in_order(runs.len(), &per_config);
     let (focused, optimized) = means.split_at(config.equivalence_ladder.len());
     let ladder: Vec<(u32, f64)> = config.equivalence_ladder.iter().copied().zip(focused.iter().copied()).collect();
     let result = OPTIMIZED_SIZES
@@ -119,7 +138,7 @@ fn equivalence(runner: &mut Runner<'_>, config: &ExperimentConfig) -> Result<Equ
 /// For every method: its best, median and worst configuration re-run, with
 /// the errors overlaid.
 fn extremes(
-    runner: &mut Runner<'_>,
+    runners: &mut [Runner<'_>],
     config: &ExperimentConfig,
     rows: &[ConfigRow],
 ) -> Result<Vec<Picture>, ExperimentError> {
@@ -141,12 +160,13 @@ fn extremes(
     let mut configs: Vec<usize> = picks.iter().map(|p| p.2).collect();
     configs.sort_unstable();
     configs.dedup();
-    let mut made: Vec<(usize, Picture)> = Vec::new();
-    for index in configs {
+    // One truth per configuration, the configurations spread over the workers.
+    let picture_of = |runner: &mut Runner<'_>, index: usize| -> Result<Vec<(usize, Picture)>, ExperimentError> {
         let light = light_for(config, runner.scene(), index);
         let (ray, focused) = runner.truths(light)?;
-        let Some(truth) = ray.or(focused) else { continue };
+        let Some(truth) = ray.or(focused) else { return Ok(Vec::new()) };
         let nearest = nearest_view_depth(runner.camera(), &truth);
+        let mut made = Vec::new();
         for (order, &(m, which, _)) in picks.iter().enumerate().filter(|(_, p)| p.2 == index) {
             let matrices = match runner.solve_method(m, light, config.single_map(), nearest) {
                 Ok((matrices, ..)) => matrices,
@@ -158,7 +178,13 @@ fn extremes(
             let image = error_overlay(&masks, &truth);
             made.push((order, Picture { method: m, which, config: index, misclassified, image }));
         }
-    }
+        Ok(made)
+    };
+    let mut made: Vec<(usize, Picture)> = Vec::new();
+    workers::for_each(runners, &configs, picture_of, |_, pictures| {
+        made.extend(pictures);
+        Ok(())
+    })?;
     // Back in method order, best, median, worst.
     made.sort_by_key(|(order, _)| *order);
     let pictures: Vec<Picture> = made.into_iter().map(|(_, p)| p).collect();

@@ -21,6 +21,30 @@ pub(super) const BYTES_PER_PIXEL: u64 = 104;
 /// the data layout, on the high side.
 pub(super) const BYTES_PER_TRIANGLE: u64 = 400;
 
+/// Host bytes per triangle of each worker beyond the first (`--jobs`): its
+/// own vertex and index buffers (host memory on software renderers). The
+/// mesh and ray caster are shared.
+pub(super) const WORKER_BYTES_PER_TRIANGLE: u64 = 200;
+
+/// Host bytes per screen pixel of each worker beyond the first: its truth
+/// and masks of the configuration in flight, its render targets, the
+/// camera capture and their staging copies (the primary rays are shared).
+pub(super) const WORKER_BYTES_PER_PIXEL: u64 = 160;
+
+/// Host bytes of each worker's largest shadow maps: the equivalence
+/// ladder's largest size, 16 bytes a texel (the map, its clear and the
+/// driver's copies: the paper preset's second worker measured +570 MB
+/// peak with the 4000² ladder, +320 MB without), the configurations' maps
+/// being far smaller.
+fn worker_map_bytes(config: &ExperimentConfig) -> u64 {
+    let largest = if config.equivalence_configs > 0 {
+        config.equivalence_ladder.iter().copied().max().unwrap_or(0).max(1024)
+    } else {
+        config.single_map()
+    };
+    u64::from(largest).pow(2).saturating_mul(16)
+}
+
 /// The most triangles a scene may have: indices are 32-bit.
 pub(super) const MAX_TRIANGLES: u64 = u32::MAX as u64 / 3;
 
@@ -144,6 +168,51 @@ pub(super) fn check(
     Ok(())
 }
 
+/// The workers of a run of `configs` configurations: `config.jobs`, or
+/// for 0 [`default_jobs`](super::default_jobs); never more than the
+/// configurations. With `available` bytes known, the automatic count
+/// drops to what fits and an explicit one that does not fit is refused.
+///
+/// # Errors
+/// [`ExperimentError::TooLarge`] naming `--jobs`.
+pub(super) fn workers(
+    config: &ExperimentConfig,
+    configs: usize,
+    available: Option<u64>,
+) -> Result<usize, ExperimentError> {
+    let wanted = if config.jobs == 0 { super::default_jobs() } else { config.jobs };
+    let wanted = wanted.min(configs).max(1);
+    let Some(available) = available else { return Ok(wanted) };
+    let triangles = match config.scene {
+        SceneSource::Builtin { triangles } | SceneSource::Large { triangles } => triangles as u64,
+        SceneSource::File { .. } => 0,
+    };
+    let pixels = u64::from(config.screen) * u64::from(config.screen);
+    let first = triangles.saturating_mul(BYTES_PER_TRIANGLE).saturating_add(pixels.saturating_mul(BYTES_PER_PIXEL));
+    let each = triangles
+        .saturating_mul(WORKER_BYTES_PER_TRIANGLE)
+        .saturating_add(pixels.saturating_mul(WORKER_BYTES_PER_PIXEL))
+        .saturating_add(worker_map_bytes(config))
+        .max(1);
+    let fit = 1 + usize::try_from(available.saturating_sub(first) / each).unwrap_or(usize::MAX);
+    if wanted <= fit {
+        return Ok(wanted);
+    }
+    if config.jobs == 0 {
+        return Ok(fit);
+    }
+    Err(ExperimentError::TooLarge {
+        flag: "--jobs",
+        value: config.jobs.to_string(),
+        limit: format!(
+            "each worker beyond the first needs about {} (its own vertex buffers, targets and maps) and the first {}, but {} of memory is available: at most {fit}",
+            gib(each),
+            gib(first),
+            gib(available)
+        ),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::{MethodSpec, Preset};
@@ -186,6 +255,22 @@ mod tests {
         let limits = wgpu::Limits { max_texture_dimension_2d: 8192, ..wgpu::Limits::downlevel_defaults() };
         let m = check(&ExperimentConfig { screen: 8192, ..quick() }, &limits, Some(1 << 30)).unwrap_err().to_string();
         assert!(m.contains("--screen 8192") && m.contains("bytes per pixel"), "{m}");
+    }
+
+    #[test]
+    fn workers_fit_memory_and_configurations() {
+        let paper = ExperimentConfig { jobs: 2, ..ExperimentConfig::preset(Preset::Paper) };
+        assert_eq!(workers(&paper, 500, Some(64 << 30)).unwrap(), 2);
+        assert_eq!(workers(&paper, 1, Some(64 << 30)).unwrap(), 1, "never more workers than configurations");
+        assert_eq!(workers(&ExperimentConfig { jobs: 8, ..paper.clone() }, 500, None).unwrap(), 8);
+        // 1.14 M triangles: the first worker needs ~0.5 GiB, each further one ~0.55.
+        let m = workers(&ExperimentConfig { jobs: 4, ..paper.clone() }, 500, Some(1 << 30)).unwrap_err().to_string();
+        assert!(m.contains("--jobs 4") && m.contains("at most 1"), "{m}");
+        assert_eq!(workers(&ExperimentConfig { jobs: 3, ..paper.clone() }, 500, Some(2 << 30)).unwrap(), 3);
+        // Automatic: as many as fit, at least one.
+        let auto = ExperimentConfig { jobs: 0, ..paper };
+        assert!(workers(&auto, 500, Some(64 << 30)).unwrap() >= 1);
+        assert_eq!(workers(&auto, 500, Some(1 << 20)).unwrap(), 1);
     }
 
     #[test]

@@ -15,7 +15,7 @@ use super::finish::{self, Completeness};
 use super::identity::Identity;
 use super::rows::{complete_configs, read_rows, write_settings};
 use super::rundir::RunDir;
-use super::{guard, ExperimentConfig, ExperimentError, Runner, Summary};
+use super::{guard, workers, ExperimentConfig, ExperimentError, Summary};
 
 /// How to merge.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -96,8 +96,11 @@ pub fn merge(
     write_settings(out.path(), &identity)?;
     let mut warnings = Vec::new();
     finish::check_counted(&rows, &mut warnings)?;
-    let mut runner = Runner::new(&config, device, queue)?;
+    // Only the equivalence's configurations run again here, spread over
+    // the default workers.
+    let jobs = guard::workers(&config, finish::equivalence_count(&config), guard::available_memory())?;
+    let mut runners = workers::runners(&config, device, queue, jobs, &mut warnings)?;
     let adapter = crate::render::device::describe(&device.adapter_info());
     let completeness = Completeness { missing, merged_from: dirs.to_vec(), adapter };
-    finish::finish(&mut runner, &config, out.path(), &rows, &completeness, warnings, started)
+    finish::finish(&mut runners, &config, out.path(), &rows, &completeness, warnings, started)
 }

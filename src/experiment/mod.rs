@@ -34,6 +34,7 @@ mod shard;
 pub mod stability;
 mod stages;
 mod timing;
+mod workers;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -58,6 +59,7 @@ pub use runner::{experiment_renderer_options, ConfigOutcome, Counts, MethodResul
 pub use shard::{Shard, ShardError};
 pub use stages::{RunStage, RunStages};
 pub use timing::{run_timing, timing_markdown, RatioEstimate, StageTimes, TimingOptions, TimingRow, PIPELINES};
+pub use workers::default_jobs;
 
 /// Which ground truth the counts use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
@@ -170,6 +172,13 @@ pub struct ExperimentConfig {
     /// of refusing to start.
     #[serde(skip)]
     pub force: bool,
+    /// Configurations run at once, each by a worker with its own device and
+    /// renderer (the scene, ray caster and primary rays shared); 0: as many
+    /// as [`default_jobs`] says. Changes no result: rows, `summary.csv`
+    /// and the report's figures are the same for every value (see
+    /// `workers.rs`). Not recorded in the run's identity.
+    #[serde(skip)]
+    pub jobs: usize,
 }
 
 /// `serde`'s `skip_serializing_if` for counts that default to 0.
@@ -220,6 +229,7 @@ impl ExperimentConfig {
             out: PathBuf::from("report"),
             resume: false,
             force: false,
+            jobs: 0,
         };
         match preset {
             Preset::Default => base,
@@ -502,7 +512,9 @@ pub fn light_for(config: &ExperimentConfig, scene: &Scene, index: usize) -> Ligh
 /// machine's memory, the report directory is locked, a previous report in
 /// it is refused (or moved aside with `force`), and `resume` checks the
 /// recorded identity. With a [`Shard`], only its configurations run and the
-/// report directory holds them for [`merge`].
+/// report directory holds them for [`merge`]. [`ExperimentConfig::jobs`]
+/// configurations run at once, the further workers on devices opened on
+/// `device`'s adapter; the report is the same for any number.
 ///
 /// # Errors
 /// Scene, renderer and I/O failures; every refusal above; and
@@ -525,26 +537,30 @@ pub fn run(
     if let Some(moved) = &dir.moved_to {
         warnings.push(format!("--force: the previous report was moved to {}", moved.display()));
     }
-    let mut runner = Runner::new(config, device, queue)?;
-    let mut writer = rows::ConfigWriter::open(config, &dir, &identity)?;
     let indices: Vec<usize> = shard::indices(config).collect();
+    let jobs = guard::workers(config, indices.len(), guard::available_memory())?;
+    let mut runners = workers::runners(config, device, queue, jobs, &mut warnings)?;
+    let mut writer = rows::ConfigWriter::open(config, &dir, &identity)?;
+    let todo: Vec<usize> = indices.iter().copied().filter(|i| !writer.done().contains(i)).collect();
+    // A resume with fewer configurations left than workers: drop the idle ones.
+    runners.truncate(todo.len().max(1));
     let done_here = |w: &rows::ConfigWriter| indices.iter().filter(|i| w.done().contains(i)).count();
     progress(Progress { done: done_here(&writer), total: indices.len(), zero_pixels: None });
-    for &index in &indices {
-        if writer.done().contains(&index) {
-            continue;
-        }
-        let outcome = runner.run_config(index)?;
+    let loop_start = Instant::now();
+    // Rows go to the journal in configuration order, whatever the workers.
+    workers::for_each(&mut runners, &todo, Runner::run_config, |&index, outcome: ConfigOutcome| {
         writer.append(index, &outcome)?;
         let counted = outcome.results.iter().filter_map(|(_, r)| r.counts).map(|c| c.counted).max();
         let zero_pixels = (counted == Some(0)).then_some(index);
         progress(Progress { done: done_here(&writer), total: indices.len(), zero_pixels });
-    }
+        Ok(())
+    })?;
+    workers::gather_stages(&mut runners, loop_start.elapsed());
     let rows = writer.rows().to_vec();
     finish::check_counted(&rows, &mut warnings)?;
     let completeness =
         finish::Completeness { adapter: crate::render::device::describe(&device.adapter_info()), ..Default::default() };
-    finish::finish(&mut runner, config, dir.path(), &rows, &completeness, warnings, started)
+    finish::finish(&mut runners, config, dir.path(), &rows, &completeness, warnings, started)
 }
 
 #[cfg(test)]

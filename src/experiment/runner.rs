@@ -2,6 +2,7 @@
 //! caster and the fixed camera, and turns one configuration (a light) into
 //! every method's matrix, masks and counts against the truths.
 
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 use super::{
@@ -80,15 +81,26 @@ impl Counts {
     }
 }
 
-/// A running experiment: the scene on the GPU, the ray caster, the camera.
-pub struct Runner<'a> {
-    pub(super) config: &'a ExperimentConfig,
+/// What the workers of a run share, read-only: the scene, its ray caster
+/// and the camera's primary rays.
+pub(super) struct Shared {
     pub(super) scene: Scene,
-    pub(super) camera: Camera,
     pub(super) caster: Option<RayCaster>,
     /// The camera's primary rays at the screen size, traced on the first
-    /// truth and shared by every light (the camera never changes).
-    pub(super) primary: Option<PrimaryView>,
+    /// truth (by whichever worker gets there first) and shared by every
+    /// light and worker (the run's camera never changes).
+    pub(super) primary: OnceLock<PrimaryView>,
+}
+
+/// A running experiment: the scene on the GPU, the ray caster, the camera.
+/// A run with several workers ([`ExperimentConfig::jobs`]) has one
+/// `Runner` per worker, each with its own device and [`Renderer`], made by
+/// [`worker`](Self::worker) and sharing the scene, the ray caster and the
+/// primary rays.
+pub struct Runner<'a> {
+    pub(super) config: &'a ExperimentConfig,
+    pub(super) shared: Arc<Shared>,
+    pub(super) camera: Camera,
     pub(super) renderer: Renderer,
     pub(super) stages: RunStages,
 }
@@ -135,12 +147,33 @@ impl<'a> Runner<'a> {
         let scene = load_scene(&config.scene)?;
         let camera = camera_for(config, &scene)?;
         let caster = matches!(config.truth, Truth::RayCast | Truth::Both).then(|| RayCaster::new(&scene));
+        let shared = Arc::new(Shared { scene, caster, primary: OnceLock::new() });
+        Self::with_shared(config, shared, camera, device, queue)
+    }
+
+    /// Another worker of the same run on `device`: its own renderer (the
+    /// scene uploaded again, the camera captured again), the scene, ray
+    /// caster and primary rays shared with `self`.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub fn worker(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Runner<'a>, ExperimentError> {
+        Self::with_shared(self.config, Arc::clone(&self.shared), self.camera, device, queue)
+    }
+
+    fn with_shared(
+        config: &'a ExperimentConfig,
+        shared: Arc<Shared>,
+        camera: Camera,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Self, ExperimentError> {
         let options = experiment_renderer_options();
-        let mut renderer = Renderer::new(device, queue, &scene, options)?;
+        let mut renderer = Renderer::new(device, queue, &shared.scene, options)?;
         // Every configuration and method sees the scene through this one
         // camera: draw it once, shade the capture per method (same masks).
         renderer.capture_view(&camera)?;
-        Ok(Self { config, scene, camera, caster, primary: None, renderer, stages: RunStages::default() })
+        Ok(Self { config, shared, camera, renderer, stages: RunStages::default() })
     }
 
     /// The camera.
@@ -152,7 +185,7 @@ impl<'a> Runner<'a> {
     /// The scene.
     #[must_use]
     pub fn scene(&self) -> &Scene {
-        &self.scene
+        &self.shared.scene
     }
 
     /// Wall time per stage so far.
@@ -166,7 +199,7 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Invalid lights (never for the hemisphere's).
     pub fn problem(&self, light: Light, map: u32) -> Result<ShadowProblem, LixelError> {
-        ShadowProblem::new(self.camera, light, self.scene.bounds(), ShadowMapSize::square(map))
+        ShadowProblem::new(self.camera, light, self.shared.scene.bounds(), ShadowMapSize::square(map))
     }
 
     /// Renders the camera view with `matrix` (masks included) and waits for it.
@@ -224,9 +257,9 @@ impl<'a> Runner<'a> {
     /// Renderer failures.
     pub fn truths(&mut self, light: Light) -> Result<(Option<ShadowMasks>, Option<ShadowMasks>), ExperimentError> {
         let size = self.config.screen;
-        let ray = match &self.caster {
+        let ray = match &self.shared.caster {
             Some(caster) => {
-                let view = self.primary.get_or_insert_with(|| caster.primary_view(&self.camera, size, size));
+                let view = self.shared.primary.get_or_init(|| caster.primary_view(&self.camera, size, size));
                 Some(caster.trace_masks_from(view, &[light]))
             }
             None => None,
@@ -329,7 +362,7 @@ impl<'a> Runner<'a> {
     /// error is recorded in its result).
     pub fn run_config(&mut self, index: usize) -> Result<ConfigOutcome, ExperimentError> {
         let start = Instant::now();
-        let light = light_for(self.config, &self.scene, index);
+        let light = light_for(self.config, &self.shared.scene, index);
         let (ray, focused_truth) = self.truths(light)?;
         let mut lap = self.stages.lap(RunStage::Truth, start);
         let truth_disagreement = match (&ray, &focused_truth) {
@@ -341,7 +374,7 @@ impl<'a> Runner<'a> {
         };
         // The coverage truth goes with the ray-cast one (same rays, same pixels).
         let samples = AaSamples::from_count(self.config.coverage_samples);
-        let coverage = match (&ray, &self.caster, samples) {
+        let coverage = match (&ray, &self.shared.caster, samples) {
             (Some(centre), Some(caster), Some(_)) => Some(Coverage::trace(caster, &self.camera, &light, centre)),
             _ => None,
         };
@@ -467,26 +500,55 @@ impl<'a> Runner<'a> {
         runs: &[(MethodSpec, u32)],
         count: usize,
     ) -> Result<Vec<f64>, ExperimentError> {
-        let mut sums = vec![(0.0f64, 0usize); runs.len()];
-        for index in 0..count {
-            let light = light_for(self.config, &self.scene, index);
-            let (ray, focused_truth) = self.truths(light)?;
-            let Some(truth) = ray.or(focused_truth) else { continue };
-            let nearest = nearest_view_depth(&self.camera, &truth);
-            for (&(method, map), (total, n)) in runs.iter().zip(&mut sums) {
-                match self.solve_method(method, light, map, nearest) {
-                    Ok((matrices, ..)) => {
-                        let masks = self.method_masks_of(method, &matrices)?;
-                        *total += Counts::compare(&masks, &truth).misclassified() as f64;
-                        *n += 1;
-                    }
-                    Err(ExperimentError::Solver(_)) => {}
-                    Err(e) => return Err(e),
+        let per_config = (0..count).map(|index| self.misclassified_at(runs, index)).collect::<Result<Vec<_>, _>>()?;
+        Ok(means_in_order(runs.len(), &per_config))
+    }
+
+    /// Misclassified pixels of each (method, map size) run on configuration
+    /// `index` against its truth, traced once for all runs; `None` for a
+    /// run whose solver refused the configuration.
+    ///
+    /// # Errors
+    /// Renderer failures.
+    pub(super) fn misclassified_at(
+        &mut self,
+        runs: &[(MethodSpec, u32)],
+        index: usize,
+    ) -> Result<Vec<Option<u64>>, ExperimentError> {
+        let light = light_for(self.config, &self.shared.scene, index);
+        let (ray, focused_truth) = self.truths(light)?;
+        let Some(truth) = ray.or(focused_truth) else { return Ok(vec![None; runs.len()]) };
+        let nearest = nearest_view_depth(&self.camera, &truth);
+        let mut counts = Vec::with_capacity(runs.len());
+        for &(method, map) in runs {
+            counts.push(match self.solve_method(method, light, map, nearest) {
+                Ok((matrices, ..)) => {
+                    let masks = self.method_masks_of(method, &matrices)?;
+                    Some(Counts::compare(&masks, &truth).misclassified())
                 }
+                Err(ExperimentError::Solver(_)) => None,
+                Err(e) => return Err(e),
+            });
+        }
+        Ok(counts)
+    }
+}
+
+/// Each run's mean of [`Runner::misclassified_at`]'s counts, summed in
+/// configuration order (so the means are the same bits however the
+/// configurations were spread over workers); `NaN` for a run no
+/// configuration could solve.
+pub(super) fn means_in_order(runs: usize, per_config: &[Vec<Option<u64>>]) -> Vec<f64> {
+    let mut sums = vec![(0.0f64, 0usize); runs];
+    for counts in per_config {
+        for (count, (total, n)) in counts.iter().zip(&mut sums) {
+            if let Some(c) = count {
+                *total += *c as f64;
+                *n += 1;
             }
         }
-        Ok(sums.into_iter().map(|(total, n)| if n == 0 { f64::NAN } else { total / n as f64 }).collect())
     }
+    sums.into_iter().map(|(total, n)| if n == 0 { f64::NAN } else { total / n as f64 }).collect()
 }
 
 /// The one shadow policy of every experiment, for every method: the

@@ -272,11 +272,11 @@ pub fn measure_variants(
     let config = ExperimentConfig { truth: Truth::RayCast, ..config.clone() };
     let mut runner = Runner::new(&config, device, queue)?;
     let start = runner.camera;
-    let diagonal = runner.scene.bounds().scene().diagonal();
-    let light = super::light_for(&config, &runner.scene, 0);
+    let diagonal = runner.shared.scene.bounds().scene().diagonal();
+    let light = super::light_for(&config, &runner.shared.scene, 0);
     let cameras: Vec<Camera> = (0..path.frames).map(|f| path.camera(&start, diagonal, f)).collect::<Result<_, _>>()?;
     let truths: Vec<ShadowMasks> = {
-        let caster = runner.caster.as_ref().ok_or_else(|| ExperimentError::Config("no ray caster".into()))?;
+        let caster = runner.shared.caster.as_ref().ok_or_else(|| ExperimentError::Config("no ray caster".into()))?;
         cameras.iter().map(|c| caster.trace_masks(c, &[light], config.screen, config.screen)).collect()
     };
     let map = ShadowMapSize::square(config.map);
@@ -294,7 +294,7 @@ pub fn measure_variants(
             let view = LoopView {
                 camera: &cameras[0],
                 lights: std::slice::from_ref(&light),
-                bounds: runner.scene.bounds(),
+                bounds: runner.shared.scene.bounds(),
                 map,
             };
             shadows.settle(&mut runner.renderer, &view, config.max_optimize_frames)?;
@@ -318,8 +318,12 @@ pub fn measure_variants(
                     runner.matrix(*kind, &problem, nearest)?.0
                 }
                 Source::Loop(shadows) => {
-                    let view =
-                        LoopView { camera, lights: std::slice::from_ref(&light), bounds: runner.scene.bounds(), map };
+                    let view = LoopView {
+                        camera,
+                        lights: std::slice::from_ref(&light),
+                        bounds: runner.shared.scene.bounds(),
+                        map,
+                    };
                     let frame = shadows.frame(&mut runner.renderer, &view)?;
                     frame.matrices[0]
                 }

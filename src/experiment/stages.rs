@@ -6,6 +6,13 @@
 //! they add up to a little less than the run time (scene loading, the report
 //! writers and the row journal are not split out). A resumed run counts only
 //! the configurations it ran itself.
+//!
+//! With several workers (`--jobs`), the per-configuration stages (truth to
+//! comparison) are each worker's wall spans summed over the workers
+//! (worker-seconds: up to `N` times the loop's wall time); the table then
+//! gives the configurations' loop as one wall-clock line and those stages
+//! as shares of the workers' summed time. The equivalence and the
+//! pictures are wall time either way.
 
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
@@ -54,7 +61,14 @@ impl RunStage {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunStages {
     spent: [Duration; RunStage::ALL.len()],
+    /// Workers of the configurations' loop and its wall time, when more
+    /// than one ran at once.
+    workers: Option<(usize, Duration)>,
 }
+
+/// The stages each worker runs per configuration.
+const PER_CONFIGURATION: [RunStage; 5] =
+    [RunStage::Truth, RunStage::Coverage, RunStage::Matrices, RunStage::Lookups, RunStage::Compare];
 
 impl RunStages {
     /// Adds `time` to `stage`.
@@ -76,10 +90,41 @@ impl RunStages {
         self.spent[stage as usize]
     }
 
-    /// All stages together.
+    /// All stages together (with several workers, worker-seconds: see
+    /// [`wall`](Self::wall)).
     #[must_use]
     pub fn total(&self) -> Duration {
         self.spent.iter().sum()
+    }
+
+    /// Adds another worker's stage times.
+    pub fn absorb(&mut self, other: &Self) {
+        for (mine, theirs) in self.spent.iter_mut().zip(other.spent) {
+            *mine += theirs;
+        }
+    }
+
+    /// Records that `workers` ran the configurations in `wall` (nothing
+    /// changes for one worker).
+    pub fn set_workers(&mut self, workers: usize, wall: Duration) {
+        self.workers = (workers > 1).then_some((workers, wall));
+    }
+
+    /// Workers of the configurations' loop (1 unless several ran at once).
+    #[must_use]
+    pub fn workers(&self) -> usize {
+        self.workers.map_or(1, |(n, _)| n)
+    }
+
+    /// Wall time of the timed stages: [`total`](Self::total) for one
+    /// worker; with several, the configurations' loop plus the stages
+    /// after it.
+    #[must_use]
+    pub fn wall(&self) -> Duration {
+        match self.workers {
+            None => self.total(),
+            Some((_, wall)) => wall + self.get(RunStage::Equivalence) + self.get(RunStage::Pictures),
+        }
     }
 
     /// `report.md`'s "Where the time went" table (empty when nothing was timed).
@@ -98,12 +143,49 @@ impl RunStages {
                 format!("{:.1}%", 100.0 * d.as_secs_f64() / elapsed.as_secs_f64())
             }
         };
-        for stage in RunStage::ALL {
+        let Some((workers, wall)) = self.workers else {
+            for stage in RunStage::ALL {
+                let d = self.get(stage);
+                let _ = writeln!(md, "| {} | {:.1} | {} |", stage.name(), d.as_secs_f64(), share(d));
+            }
+            let rest = elapsed.saturating_sub(self.total());
+            let _ =
+                writeln!(md, "| other (scene, caster, report files) | {:.1} | {} |", rest.as_secs_f64(), share(rest));
+            return md;
+        };
+        let _ = writeln!(
+            md,
+            "| configurations ({workers} workers at once) | {:.1} | {} |",
+            wall.as_secs_f64(),
+            share(wall)
+        );
+        for stage in [RunStage::Equivalence, RunStage::Pictures] {
             let d = self.get(stage);
             let _ = writeln!(md, "| {} | {:.1} | {} |", stage.name(), d.as_secs_f64(), share(d));
         }
-        let rest = elapsed.saturating_sub(self.total());
-        let _ = writeln!(md, "| other (scene, caster, report files) | {:.1} | {} |", rest.as_secs_f64(), share(rest));
+        let rest = elapsed.saturating_sub(self.wall());
+        let _ = writeln!(
+            md,
+            "| other (scene, caster, workers' devices, report files) | {:.1} | {} |",
+            rest.as_secs_f64(),
+            share(rest)
+        );
+        let busy: Duration = PER_CONFIGURATION.iter().map(|&s| self.get(s)).sum();
+        let _ = writeln!(
+            md,
+            "\nThe configurations' stages, each worker's wall time summed over the {workers} workers \
+             ({:.1} worker-seconds in {:.1} s: {:.2} workers busy on average):\n",
+            busy.as_secs_f64(),
+            wall.as_secs_f64(),
+            if wall.is_zero() { 0.0 } else { busy.as_secs_f64() / wall.as_secs_f64() }
+        );
+        let _ = writeln!(md, "| stage | worker s | share of worker time |");
+        let _ = writeln!(md, "|---|---:|---:|");
+        for stage in PER_CONFIGURATION {
+            let d = self.get(stage);
+            let part = if busy.is_zero() { 0.0 } else { 100.0 * d.as_secs_f64() / busy.as_secs_f64() };
+            let _ = writeln!(md, "| {} | {:.1} | {part:.1}% |", stage.name(), d.as_secs_f64());
+        }
         md
     }
 }
@@ -125,5 +207,30 @@ mod tests {
         assert!(md.contains("| ground truth | 2.0 | 50.0% |"), "{md}");
         assert!(md.contains("| method renders + readback | 0.5 | 12.5% |"), "{md}");
         assert!(md.contains("| other (scene, caster, report files) | 1.5 | 37.5% |"), "{md}");
+        assert_eq!(s.wall(), s.total());
+    }
+
+    #[test]
+    fn workers_sum_their_stages_and_the_loop_is_wall_time() {
+        let mut a = RunStages::default();
+        a.add(RunStage::Truth, Duration::from_secs(2));
+        a.add(RunStage::Lookups, Duration::from_secs(6));
+        let mut b = RunStages::default();
+        b.add(RunStage::Truth, Duration::from_secs(2));
+        b.add(RunStage::Lookups, Duration::from_secs(6));
+        a.absorb(&b);
+        a.set_workers(2, Duration::from_secs(9));
+        a.add(RunStage::Equivalence, Duration::from_secs(1));
+        assert_eq!((a.workers(), a.total(), a.wall()), (2, Duration::from_secs(17), Duration::from_secs(10)));
+        let md = a.markdown(Duration::from_secs(10));
+        assert!(md.contains("| configurations (2 workers at once) | 9.0 | 90.0% |"), "{md}");
+        assert!(md.contains("16.0 worker-seconds in 9.0 s: 1.78 workers busy"), "{md}");
+        assert!(md.contains("| ground truth | 4.0 | 25.0% |"), "{md}");
+        assert!(md.contains("| method renders + readback | 12.0 | 75.0% |"), "{md}");
+        // One worker: the table of a run without workers.
+        let mut one = b.clone();
+        one.set_workers(1, Duration::from_secs(8));
+        assert_eq!((one.workers(), one.wall()), (1, Duration::from_secs(8)));
+        assert!(!one.markdown(Duration::from_secs(9)).contains("workers"));
     }
 }

@@ -48,12 +48,15 @@ impl ClipWorkspace {
     }
 }
 
-/// Where a vertex lies relative to a clipping plane, with tolerance.
+/// Where a vertex lies relative to a clipping plane, with tolerance. The
+/// discriminants are distinct bits, so that or-ing a face's sides tells at
+/// once whether the plane cuts it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 enum Side {
-    Inside,
-    On,
-    Outside,
+    Inside = 1,
+    On = 2,
+    Outside = 4,
 }
 
 impl Side {
@@ -100,8 +103,9 @@ impl ConvexPolyhedron {
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
         side.clear();
-        // How many vertices lie inside, on and outside the plane.
-        let mut count = [0usize; 3];
+        // How many vertices lie inside, on and outside the plane (indexed
+        // by the side's bit).
+        let mut count = [0usize; 5];
         side.extend(dist.iter().map(|&d| {
             let s = Side::of(d, eps);
             count[s as usize] += 1;
@@ -138,6 +142,26 @@ impl ConvexPolyhedron {
             let start = indices.len();
             let along_start = along.len();
             let loop_indices = &self.indices[face.start..face.end];
+            // The sides present in the face: the plane cuts it only when it
+            // has vertices strictly on both sides. Otherwise the edge scan
+            // below would make no cut point and note no plane edge: a face
+            // with nothing outside is kept as it is (renumbered), and one
+            // with nothing strictly inside is dropped.
+            // (The reference path scans every face.)
+            let present = if reference { 0xff } else { loop_indices.iter().fold(0u8, |m, &a| m | side[a] as u8) };
+            let has_inside = present & Side::Inside as u8 != 0;
+            if present & Side::Outside as u8 == 0 {
+                if has_inside && loop_indices.len() >= 3 {
+                    indices.extend(loop_indices.iter().map(|&a| new_index[a]));
+                    faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+                } else {
+                    dropped_inside |= has_inside;
+                }
+                continue;
+            }
+            if !has_inside {
+                continue;
+            }
             let mut keeps_inside = false;
             // The last cut pushed, if it is the last index pushed.
             let mut last_cut = usize::MAX;
@@ -204,7 +228,7 @@ impl ConvexPolyhedron {
             indices.extend_from_slice(cycle);
             faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
         };
-        if reference || !walker.trace_simple(cap) {
+        if reference || !walker.trace_simple(vertices.len(), cap) {
             walker.walk(vertices.len(), |cycle| {
                 let start = indices.len();
                 indices.extend_from_slice(cycle);
@@ -271,42 +295,34 @@ pub(super) fn half_edge_faces(map: &mut IndexMap<(usize, usize), usize>, faces: 
     }
 }
 
-/// The directed edges of a body's faces grouped by start vertex (counting
-/// sort, no hashing): the face of edge `a → b` is found among the few edges
-/// leaving `a`.
+/// The directed edges of a body's faces chained by start vertex (no
+/// hashing, one pass): the face of edge `a → b` is found among the few edges
+/// leaving `a`, latest first.
 #[derive(Clone, Debug, Default)]
 pub(super) struct HalfEdges {
-    /// Edges leaving vertex `a`: `to_face[start[a]..start[a + 1]]`.
-    start: Vec<usize>,
-    /// `(b, face)` per directed edge `a → b`, in face order within each `a`.
-    to_face: Vec<(usize, usize)>,
+    /// Per vertex, the last directed edge leaving it (`usize::MAX`: none).
+    head: Vec<usize>,
+    /// `(b, face, the previous edge leaving a)` per directed edge `a → b`,
+    /// in face order.
+    edges: Vec<(usize, usize, usize)>,
 }
 
 impl HalfEdges {
     /// Rebuilds for `faces` over `vertex_count` vertices.
     pub(super) fn build(&mut self, vertex_count: usize, faces: &[FaceSpan], indices: &[usize]) {
-        // Every index is a vertex of the body; the bound only keeps a
-        // malformed body from indexing out of range.
-        let vertex_count = indices.iter().map(|&i| i + 1).max().unwrap_or(0).max(vertex_count);
-        let start = &mut self.start;
-        start.clear();
-        start.resize(vertex_count + 2, 0);
-        for face in faces {
-            for (a, _) in loop_edges(&indices[face.start..face.end]) {
-                start[a + 2] += 1;
-            }
-        }
-        for i in 2..start.len() {
-            start[i] += start[i - 1];
-        }
-        // `start[a + 1]` is now where `a`'s edges begin; used as the fill
-        // cursor it ends where they end, i.e. where `a + 1`'s begin.
-        self.to_face.clear();
-        self.to_face.resize(start[vertex_count + 1], (0, 0));
+        let Self { head, edges } = self;
+        head.clear();
+        head.resize(vertex_count, usize::MAX);
+        edges.clear();
         for (f, face) in faces.iter().enumerate() {
             for (a, b) in loop_edges(&indices[face.start..face.end]) {
-                self.to_face[start[a + 1]] = (b, f);
-                start[a + 1] += 1;
+                // Every index is a vertex of the body; growing only keeps
+                // a malformed body from indexing out of range.
+                if a >= head.len() {
+                    head.resize(a + 1, usize::MAX);
+                }
+                edges.push((b, f, head[a]));
+                head[a] = edges.len() - 1;
             }
         }
     }
@@ -314,8 +330,14 @@ impl HalfEdges {
     /// The face of directed edge `a → b`; the last one listed if several
     /// faces run it (what a map filled in face order would hold).
     pub(super) fn face(&self, a: usize, b: usize) -> Option<usize> {
-        let range = self.start.get(a).copied()?..self.start.get(a + 1).copied()?;
-        self.to_face[range].iter().rev().find(|&&(to, _)| to == b).map(|&(_, face)| face)
+        let mut e = *self.head.get(a)?;
+        while let Some(&(to, face, previous)) = self.edges.get(e) {
+            if to == b {
+                return Some(face);
+            }
+            e = previous;
+        }
+        None
     }
 }
 
@@ -405,21 +427,22 @@ impl LoopWalker {
     /// which every vertex has one edge out: hands `emit` the loop the walk
     /// would (from the first edge's start on) and returns `true`. Returns
     /// `false`, emitting nothing, for any other boundary (the caller then
-    /// walks it).
-    pub(super) fn trace_simple(&mut self, mut emit: impl FnMut(&[usize])) -> bool {
-        let Self { boundary, path, .. } = self;
+    /// walks it). `vertex_count` bounds the vertex indices (larger ones, from
+    /// no clip, also take the walk).
+    pub(super) fn trace_simple(&mut self, vertex_count: usize, mut emit: impl FnMut(&[usize])) -> bool {
+        let Self { boundary, path, left: next, .. } = self;
         let k = boundary.len();
         if k == 0 {
             return true;
         }
-        // The searches below are quadratic: long boundaries take the walk.
-        if k > 32 {
-            return false;
-        }
-        for i in 1..k {
-            let from = boundary[i].0;
-            if boundary[..i].iter().any(|e| e.0 == from) {
-                return false;
+        // Each vertex's one edge out, by vertex: a second edge out of the
+        // same vertex means the boundary is not one simple cycle.
+        next.clear();
+        next.resize(vertex_count, usize::MAX);
+        for &(from, to) in boundary.iter() {
+            match next.get_mut(from) {
+                Some(slot) if *slot == usize::MAX && to != usize::MAX => *slot = to,
+                _ => return false,
             }
         }
         path.clear();
@@ -427,7 +450,7 @@ impl LoopWalker {
         let mut v = start;
         loop {
             path.push(v);
-            let Some(&(_, w)) = boundary.iter().find(|e| e.0 == v) else {
+            let Some(&w) = next.get(v).filter(|&&w| w != usize::MAX) else {
                 return false;
             };
             if w == start {

@@ -1119,6 +1119,7 @@ mod tests {
                 body.clip_into(&plane, eps, &mut a, &mut fast);
                 body.clip_into(&plane, eps, &mut b, &mut reference);
                 assert_eq!(a, b);
+                assert!(a.bit_eq(&b));
                 cuts += 1;
                 if a.is_empty() {
                     break;

@@ -21,6 +21,8 @@ pub struct SampleWorkspace {
     pub(super) grid: Grid,
     classes: Classes,
     pub(super) bits: Vec<u32>,
+    /// Per pixel column: its screen x and that x's term of the unprojection.
+    columns: Vec<(f64, DVec4)>,
 }
 
 impl SampleWorkspace {
@@ -262,7 +264,7 @@ impl Classes {
 /// readback in `workspace.grid` for light bit `workspace.bits[k]` (at most 32
 /// lights), in one pass over the pixels.
 pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, options: &SampleOptions) {
-    let SampleWorkspace { grid, classes, bits } = workspace;
+    let SampleWorkspace { grid, classes, bits, columns } = workspace;
     let grid = &*grid;
     let (w, h) = (grid.width, grid.height);
     let n = w * h;
@@ -278,15 +280,24 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         let d = grid.depth[y * w + x];
         d.is_finite().then_some(d)
     };
-    // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0.
-    let unproject = |sx: f64, sy: f64, d: f64| -> DVec4 {
-        let v = world_from_screen * DVec4::new(sx, sy, d, 1.0);
+    // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0:
+    // `world_from_screen * [sx, sy, d, 1]` summed in glam's order (x, y, z,
+    // w columns), with the column's and the row's terms made once each
+    // (the same products, so the same bits; `w_axis * 1.0` is `w_axis`).
+    let m = world_from_screen;
+    let unproject = |column: DVec4, row: DVec4, d: f64| -> DVec4 {
+        let v = column + row + m.z_axis * d + m.w_axis;
         if v.w < 0.0 {
             -v
         } else {
             v
         }
     };
+    columns.clear();
+    columns.extend((0..w).map(|x| {
+        let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
+        (sx, m.x_axis * sx)
+    }));
     // Each light's `X~ = T [x; w]` rows, made once rather than per pixel
     // (`LightFrame::homogeneous4` rebuilds them on every call).
     let mut rows = [[DVec4::ZERO; 3]; 32];
@@ -302,7 +313,9 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     let mut covered = 0usize;
     let mut shadowed = [0usize; 32];
     for y in 0..h {
-        for x in 0..w {
+        let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+        let row = m.y_axis * sy;
+        for (x, &(sx, column)) in columns.iter().enumerate() {
             let i = y * w + x;
             if !grid.depth[i].is_finite() {
                 continue;
@@ -318,9 +331,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 continue;
             }
             let d = grid.depth[i];
-            let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
-            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-            let here = unproject(sx, sy, d);
+            let here = unproject(column, row, d);
             if !(here.w > 0.0) || !here.is_finite() {
                 for bit in set_bits(active) {
                     all[bit].counts.rejected_invalid += 1;
@@ -332,12 +343,10 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             let mut surface: Option<Option<Surface>> = None;
             for bit in set_bits(active) {
                 let samples = &mut all[bit];
-                let frame = samples.frame;
                 let rows = &rows[bit];
                 let x_light = to_light(rows, here);
                 samples.relevant.push(x_light);
                 samples.relevant_world.push(world);
-                samples.depth_points.push(world);
                 if mixed_bits >> bit & 1 == 0 {
                     continue;
                 }
@@ -363,7 +372,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 let sample = match found {
                     Surface::Given { tx, ty, .. } => {
                         let along = |t: DVec3| to_light(rows, t.extend(0.0));
-                        BoundarySample { light: frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+                        BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
                     }
                     Surface::Depth { dx4, dy4, .. } => {
                         BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }

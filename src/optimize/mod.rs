@@ -579,9 +579,19 @@ impl Optimizer {
     }
 
     fn finish(&self, samples: &Samples, homography: DMat3) -> LightMatrix {
+        // `finish` folds the depth over `focus` then `depth_points`: the
+        // bodies' vertices, then every relevant sample (kept once, not
+        // copied into a second list per pixel).
         samples
             .problem
-            .placement(samples.frame, homography.row(2), &[], &samples.depth_points, Method::Optimized, None)
+            .placement(
+                samples.frame,
+                homography.row(2),
+                &samples.depth_points,
+                &samples.relevant_world,
+                Method::Optimized,
+                None,
+            )
             .finish(homography, &self.extreme)
     }
 }

@@ -148,8 +148,9 @@ pub struct Samples {
     /// World position of every relevant sample (the optimizer checks its
     /// answer on them, as a renderer evaluates it).
     pub(crate) relevant_world: Vec<DVec3>,
-    /// World points whose depth the map must cover: the visible receivers'
-    /// body and its casters, and every relevant sample.
+    /// World points whose depth the map must cover besides the relevant
+    /// samples (`relevant_world`, which follow them in the depth fold): the
+    /// vertices of the visible receivers' body and of its casters.
     pub(crate) depth_points: Vec<DVec3>,
     pub(crate) counts: SampleCounts,
 }
@@ -306,7 +307,6 @@ impl Samples {
         }
         self.relevant.push(x);
         self.relevant_world.push(p);
-        self.depth_points.push(p);
         true
     }
 

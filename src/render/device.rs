@@ -55,27 +55,56 @@ impl Gpu {
                     continue;
                 }
             };
-            let info = adapter.get_info();
-            let required_limits = wgpu::Limits {
-                max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
-                ..wgpu::Limits::default()
-            };
-            let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-                label: Some(label),
-                required_features: adapter.features() & Renderer::optional_features(),
-                required_limits,
-                ..Default::default()
-            }))
-            .map_err(|e| RenderError::Device {
-                backend: info.backend.to_string(),
-                adapter: info.name.clone(),
-                pass: "opening the device",
-                message: e.to_string(),
-                hint: hint(info.backend),
-            })?;
-            return Ok(Self { device, queue, info });
+            return Self::on_adapter(&adapter, label);
         }
         Err(RenderError::NoAdapter { tried: failures.join("; ") })
+    }
+
+    /// Opens another device on the adapter `info` describes (same backend,
+    /// vendor, device id and name): a second queue on the same GPU, as the
+    /// experiment's workers use (on lavapipe, a second queue thread).
+    ///
+    /// # Errors
+    /// [`RenderError::NoAdapter`] when no such adapter is found;
+    /// [`RenderError::Device`] when it refuses the device.
+    pub fn open_like(info: &wgpu::AdapterInfo, label: &str) -> Result<Self, RenderError> {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        descriptor.backends = info.backend.into();
+        let instance = wgpu::Instance::new(descriptor);
+        let adapters = pollster::block_on(instance.enumerate_adapters(info.backend.into()));
+        let same = |a: &wgpu::Adapter| {
+            let other = a.get_info();
+            (other.backend, other.vendor, other.device, &other.name)
+                == (info.backend, info.vendor, info.device, &info.name)
+        };
+        match adapters.iter().find(|a| same(a)) {
+            Some(adapter) => Self::on_adapter(adapter, label),
+            None => Err(RenderError::NoAdapter { tried: format!("{} again for another device", describe(info)) }),
+        }
+    }
+
+    /// A device on `adapter` with the renderer's optional features and the
+    /// adapter's own texture limit.
+    fn on_adapter(adapter: &wgpu::Adapter, label: &str) -> Result<Self, RenderError> {
+        let info = adapter.get_info();
+        let required_limits = wgpu::Limits {
+            max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
+            ..wgpu::Limits::default()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some(label),
+            required_features: adapter.features() & Renderer::optional_features(),
+            required_limits,
+            ..Default::default()
+        }))
+        .map_err(|e| RenderError::Device {
+            backend: info.backend.to_string(),
+            adapter: info.name.clone(),
+            pass: "opening the device",
+            message: e.to_string(),
+            hint: hint(info.backend),
+        })?;
+        Ok(Self { device, queue, info })
     }
 
     /// `"<adapter> (<backend>)"`, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (vulkan)`.
