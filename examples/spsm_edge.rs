@@ -18,6 +18,14 @@
 //! (the experiment's error overlay: truth's shading, false shadow red,
 //! false lit blue), and prints the close-up's counts.
 //!
+//! With `--sgsm-closeup FILE.png` it instead writes issue 17's close-up:
+//! the configuration's `--method` (default `optimized`) with its `+spsm`
+//! and `+sgsm` lookups (each method solved as the experiment does), the
+//! `--window`-pixel square (default 48) of the experiment's screen where
+//! SPSM misclassifies most pixels that SGSM gets right, enlarged 4x:
+//! SPSM, SGSM and the ray-cast truth side by side (the experiment's error
+//! overlay), and prints both lookups' counts in the window and overall.
+//!
 //! With `--overlay DIR` it instead runs the configuration with `--method`
 //! (default `focused`) and its `+spsm` and `+sgsm` lookups, writes each one's
 //! error overlay to `DIR/<method>-config<N>.png` and sorts every lookup's
@@ -60,6 +68,12 @@ fn run() -> Result<(), String> {
         let fov: f64 = args.parse("--fov", 5.0)?;
         let screen: u32 = args.parse("--screen", 256)?;
         return trio(preset, index, base, (fov, screen), path);
+    }
+    if let Some(path) = args.value("--sgsm-closeup") {
+        let name = args.value("--method").unwrap_or("optimized");
+        let base = MethodSpec::parse(name).ok_or_else(|| format!("unknown method {name:?}"))?;
+        let window: u32 = args.parse("--window", 48)?;
+        return sgsm_closeup(preset, index, base, window, path);
     }
     if let Some(dir) = args.value("--overlay") {
         let name = args.value("--method").unwrap_or("focused");
@@ -238,6 +252,75 @@ fn trio(preset: Preset, index: usize, base: MethodSpec, (fov, screen): (f64, u32
     }
     out.save(path).map_err(|e| format!("{path}: {e}"))?;
     println!("target {window:?}, eye {eye:?}, fov {fov} deg; wrote {path}");
+    Ok(())
+}
+
+/// Issue 17's close-up (see the module docs).
+fn sgsm_closeup(preset: Preset, index: usize, base: MethodSpec, window: u32, path: &str) -> Result<(), String> {
+    let mut config = ExperimentConfig::preset(preset);
+    let spsm = base.with_lookup(ShadowLookup::Spsm(SpsmOptions::default()));
+    let sgsm = MethodSpec::parse(&format!("{}+sgsm", base.name())).ok_or("no +sgsm method")?;
+    config.methods = vec![spsm, sgsm];
+    config.coverage_samples = 0;
+    let (device, queue, _) = support::gpu()?;
+    let mut runner = Runner::new(&config, &device, &queue).map_err(|e| e.to_string())?;
+    let outcome = runner.run_config(index).map_err(|e| e.to_string())?;
+    let truth = runner.truths(outcome.light).map_err(|e| e.to_string())?.0.ok_or("no ray-cast truth")?;
+    let (w, h) = (truth.width, truth.height);
+    let mut masks = Vec::new();
+    for (method, result) in &outcome.results {
+        let m = result.matrix.ok_or_else(|| format!("{} failed ({})", method.name(), result.note))?;
+        masks.push(runner.masks_with(&m, method.lookup()).map_err(|e| e.to_string())?);
+    }
+    // Per pixel: +1 where SPSM errs and SGSM does not, -1 the other way.
+    let counted = |i: usize| truth.visible(i) && truth.facing[i] & 1 == 1;
+    let wrong = |k: usize, i: usize| counted(i) && (masks[k].shadow[i] ^ truth.shadow[i]) & 1 == 1;
+    let (mut best, mut at) = (i64::MIN, (0, 0));
+    for y in (0..h.saturating_sub(window)).step_by(4) {
+        for x in (0..w.saturating_sub(window)).step_by(4) {
+            let mut d = 0i64;
+            for yy in y..y + window {
+                for xx in x..x + window {
+                    let i = (yy * w + xx) as usize;
+                    d += i64::from(wrong(0, i)) - i64::from(wrong(1, i));
+                }
+            }
+            if d > best {
+                (best, at) = (d, (x, y));
+            }
+        }
+    }
+    if best <= 0 {
+        return Err(format!("no window where SPSM errs more than SGSM; {path} not written"));
+    }
+    let in_window = |k: usize| {
+        (at.1..at.1 + window)
+            .flat_map(|y| (at.0..at.0 + window).map(move |x| (y * w + x) as usize))
+            .filter(|&i| wrong(k, i))
+            .count()
+    };
+    for (k, (method, result)) in outcome.results.iter().enumerate() {
+        let c = result.counts.unwrap_or_default();
+        println!("{}: {} misclassified in the view, {} in the window", method.name(), c.misclassified(), in_window(k));
+    }
+    let mut panels: Vec<image::RgbaImage> = masks.iter().map(|m| lixel::experiment::error_overlay(m, &truth)).collect();
+    panels.push(lixel::experiment::error_overlay(&truth, &truth));
+    let scale = 4;
+    let crops: Vec<image::RgbaImage> = panels
+        .iter()
+        .map(|p| {
+            let crop = image::imageops::crop_imm(p, at.0, at.1, window, window).to_image();
+            image::imageops::resize(&crop, window * scale, window * scale, image::imageops::FilterType::Nearest)
+        })
+        .collect();
+    let gap = 4;
+    let side = window * scale;
+    let mut out = image::RgbaImage::from_pixel(3 * side + 2 * gap, side, image::Rgba([255, 255, 255, 255]));
+    for (k, crop) in crops.iter().enumerate() {
+        image::imageops::overlay(&mut out, crop, i64::from(k as u32 * (side + gap)), 0);
+    }
+    out.save(path).map_err(|e| format!("{path}: {e}"))?;
+    println!("window {window}x{window} at ({}, {}) of {w}x{h}; wrote {path}", at.0, at.1);
     Ok(())
 }
 

@@ -47,7 +47,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     }
     if own.kind == 1u {
         sgsm_count(SGSM_PATH_DEPTH_ONLY);
-        return own.depth < zeta - SPSM_BIAS;
+        return spsm_decide(light, k, world, SPSM_PATH_DEPTH_ONLY, own.depth < zeta - SPSM_BIAS);
     }
     if spsm_inside(own, p) {
         sgsm_count(SGSM_PATH_OWN);

@@ -18,10 +18,15 @@
 //            centre, in texels, as two f16 each (pack2x16float);
 //   w:       bits 31..16: zeta at the texel centre on the triangle's plane,
 //            16-bit unorm over [-1/16, 17/16];
-//            bits 15..8 / 7..0: 1 + dzeta/dx and 1 + dzeta/dy in the
-//            paper's power-quantized 8-bit code (eq. 3, codes 0..=254), in
-//            units of the map's [0, 1] extent per axis (texel slope times
-//            the map size).
+//            bits 15..0: the plane's gradient (dzeta/dx, dzeta/dy), never 0:
+//            SPSM_GRADIENT_CODE 1 (the default, session 6): bits 15..8 the
+//            log magnitude per texel (1: zero; c >= 2: SPSM_LOG_MIN
+//            e^(SPSM_LOG_STEP (c - 2))), bits 7..0 the direction (2 pi k /
+//            256); 0: the paper's power-quantized 8-bit code (eq. 3, codes
+//            0..=254, stored + 1) of dzeta/dx and dzeta/dy in units of the
+//            map's [0, 1] extent per axis (texel slope times the map size).
+//            src/render/spsm/packing.rs (GradientCode) mirrors both and
+//            says why the log-polar code replaced the paper's.
 //   w & 0xffff = 0: no triangle. All words zero (the cleared value) is an
 //   empty texel (nothing drawn); x = 1 a depth-only texel (a triangle
 //   crossing the light's w = 0 plane, rasterized the standard way).
@@ -66,6 +71,46 @@ fn spsm_slope_error(q: u32) -> f32 {
     let lo = spsm_decode_slope(max(f32(q) - 0.5, 0.0));
     let hi = spsm_decode_slope(min(f32(q) + 0.5, 254.0));
     return max(abs(d - lo), abs(hi - d));
+}
+
+const SPSM_TAU: f32 = 6.2831853;
+
+// The 16-bit code of gradient `g` (zeta per texel) on a map of `map_size`.
+fn spsm_encode_gradient(g: vec2<f32>, map_size: vec2<f32>) -> u32 {
+    if SPSM_GRADIENT_CODE == 0u {
+        let slopes = g * map_size;
+        return ((spsm_encode_slope(slopes.x) + 1u) << 8u) | (spsm_encode_slope(slopes.y) + 1u);
+    }
+    let m = length(g);
+    if !(m >= SPSM_LOG_MIN * exp(-0.5 * SPSM_LOG_STEP)) {
+        return 1u << 8u;
+    }
+    let c = 2u + u32(clamp(round(log(m / SPSM_LOG_MIN) / SPSM_LOG_STEP), 0.0, 253.0));
+    let turn = atan2(g.y, g.x) / SPSM_TAU;
+    let k = u32(i32(round(turn * 256.0)) & 255);
+    return (c << 8u) | k;
+}
+
+// The gradient (xy, zeta per texel) of a 16-bit code and its error bound
+// per axis (zw; mirrored by packing::gradient_error).
+fn spsm_decode_gradient(bits: u32, map_size: vec2<f32>) -> vec4<f32> {
+    let hi = (bits >> 8u) & 0xffu;
+    let lo = bits & 0xffu;
+    if SPSM_GRADIENT_CODE == 0u {
+        let qx = max(hi, 1u) - 1u;
+        let qy = max(lo, 1u) - 1u;
+        let g = vec2<f32>(spsm_decode_slope(f32(qx)), spsm_decode_slope(f32(qy))) / map_size;
+        let e = vec2<f32>(spsm_slope_error(qx), spsm_slope_error(qy)) / map_size;
+        return vec4<f32>(g, e);
+    }
+    if hi < 2u {
+        return vec4<f32>(0.0, 0.0, SPSM_LOG_MIN, SPSM_LOG_MIN);
+    }
+    let m = SPSM_LOG_MIN * exp(SPSM_LOG_STEP * f32(hi - 2u));
+    let angle = f32(lo) / 256.0 * SPSM_TAU;
+    let half = exp(0.5 * SPSM_LOG_STEP);
+    let e = m * (half - 1.0) + m * half * (SPSM_TAU / 512.0);
+    return vec4<f32>(m * cos(angle), m * sin(angle), e, e);
 }
 
 fn spsm_pack_offset(v: vec2<f32>) -> u32 {
@@ -232,10 +277,9 @@ fn spsm_with_slopes(t: SpsmTexel, words: vec4<u32>, map_size: vec2<f32>) -> Spsm
     if t.kind != 0u {
         return out;
     }
-    let qx = ((words.w >> 8u) & 0xffu) - 1u;
-    let qy = (words.w & 0xffu) - 1u;
-    out.gradient = vec2<f32>(spsm_decode_slope(f32(qx)), spsm_decode_slope(f32(qy))) / map_size;
-    out.gradient_error = vec2<f32>(spsm_slope_error(qx), spsm_slope_error(qy)) / map_size;
+    let g = spsm_decode_gradient(words.w & 0xffffu, map_size);
+    out.gradient = g.xy;
+    out.gradient_error = g.zw;
     return out;
 }
 

@@ -315,6 +315,9 @@ const SPSM_PATH_UNIFORM: u32 = 16u;
 const SPSM_PATH_RECOVER: u32 = 32u;
 const SGSM_PATH_PLANE_LIT: u32 = 64u;
 const SGSM_PATH_PLANE_SHADOWED: u32 = 128u;
+// A depth-only texel (a triangle crossing the light's w = 0 plane): its
+// 16-bit z / w at the texel centre against p's, constant bias only.
+const SPSM_PATH_DEPTH_ONLY: u32 = 256u;
 
 // A small stored triangle (twice its area below this, in texels²) is taken
 // for a facet of a finely tessellated curved surface (session 4).
@@ -377,7 +380,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         return false;
     }
     if own.kind == 1u {
-        return own.depth < zeta - SPSM_BIAS;
+        return spsm_decide(light, k, world, SPSM_PATH_DEPTH_ONLY, own.depth < zeta - SPSM_BIAS);
     }
     let own_plane = spsm_plane_at(own, p);
     let own_slack = SPSM_BIAS + SPSM_TOLERANCE * own_plane.y;

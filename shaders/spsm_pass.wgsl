@@ -23,7 +23,8 @@
 //
 // A triangle with a vertex at or behind the light's w = 0 plane cannot be
 // projected: it is drawn with its clip coordinates (the hardware clips it)
-// and stores a depth-only texel (standard shadow-map test there).
+// and stores a depth-only texel and the standard map's centre-sampled
+// depth (the lookup's standard verdict there).
 
 // `ShadowPassRaw` (src/render/uniforms.rs), shared with shadow.wgsl; this
 // pass reads the matrix and the map size (clamp.yz).
@@ -63,6 +64,9 @@ struct SpsmVertex {
     @location(6) @interpolate(flat) x1: vec3<f32>,
     @location(7) @interpolate(flat) x2: vec3<f32>,
     @location(8) @interpolate(flat) w: vec3<f32>,
+    // The world position, interpolated (clipped fallback only: its
+    // centre-sampled depth, session 6).
+    @location(9) world: vec3<f32>,
 }
 
 fn spsm_world_of(index_slot: u32) -> vec3<f32> {
@@ -100,6 +104,7 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     if min(c[0].w, min(c[1].w, c[2].w)) <= 1e-6 * w_scale {
         out.clip = c[corner];
         out.mode = 1u;
+        out.world = spsm_world_of(first + corner);
         return out;
     }
     var t = array<vec2<f32>, 3>(spsm_to_texel(c[0]), spsm_to_texel(c[1]), spsm_to_texel(c[2]));
@@ -218,6 +223,13 @@ fn spsm_store_centre(in: SpsmVertex, c: vec2<f32>) {
     }
     let depth = spsm_linear_depth_at(in, c);
     let slope = max(abs(spsm_linear_depth_at(in, c + vec2<f32>(1.0, 0.0)) - depth), abs(spsm_linear_depth_at(in, c + vec2<f32>(0.0, 1.0)) - depth));
+    spsm_offer_centre(c, depth, slope);
+}
+
+// Offers `depth` (linear light depth at texel centre `c`, changing by
+// `slope` over one texel) to the texel's centre-sampled depth with
+// shadow.wgsl's bias.
+fn spsm_offer_centre(c: vec2<f32>, depth: f32, slope: f32) {
     var bias = shadow_pass.depth.z + shadow_pass.depth.w * slope;
     if shadow_pass.clamp.x > 0.0 {
         bias = min(bias, shadow_pass.clamp.x);
@@ -237,8 +249,17 @@ struct SpsmOutput {
 @fragment
 fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     var out: SpsmOutput;
+    // The clipped fallback's linear light depth and its change over a
+    // texel, as shadow.wgsl computes them (derivatives before any branch).
+    let fallback_depth = linear_light_depth(shadow_pass.position, shadow_pass.depth.xy, in.world);
+    let fallback_slope = max(abs(dpdx(fallback_depth)), abs(dpdy(fallback_depth)));
     if in.mode == 1u {
-        // Clipped fallback: the hardware's depth z / w at the texel centre.
+        // Clipped fallback: the hardware's depth z / w at the texel centre,
+        // and the standard map's centre-sampled depth (session 6: these
+        // texels, triangles crossing the light's w = 0 plane such as a
+        // floor under a PSM-like warp, had only the 16-bit z / w and the
+        // constant bias, and showed as acne).
+        spsm_offer_centre(in.clip.xy, fallback_depth, fallback_slope);
         let zeta = in.clip.z;
         out.texel = vec4<u32>(SPSM_DEPTH_ONLY, 0u, 0u, spsm_encode_depth(zeta) << 16u);
         out.depth = spsm_depth_key(zeta);
@@ -262,12 +283,11 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
         spsm_store_centre(in, c);
     }
-    let slopes = g * shadow_pass.clamp.yz;
     out.texel = vec4<u32>(
         spsm_pack_offset(in.t0 - c),
         spsm_pack_offset(in.t1 - c),
         spsm_pack_offset(in.t2 - c),
-        (spsm_encode_depth(zeta_c) << 16u) | ((spsm_encode_slope(slopes.x) + 1u) << 8u) | (spsm_encode_slope(slopes.y) + 1u),
+        (spsm_encode_depth(zeta_c) << 16u) | spsm_encode_gradient(g, shadow_pass.clamp.yz),
     );
     out.depth = spsm_depth_key(min_depth);
     return out;

@@ -196,7 +196,7 @@ fn gpu_sweep_matches_the_cpu_reference() {
         let (w, h) = (matrix.map_size.width, matrix.map_size.height);
         let words = renderer.read_map_words(light).unwrap().unwrap();
         let lixel::render::sgsm::SgsmWords { normals, masks } = renderer.read_sgsm_words(light).unwrap().unwrap();
-        let map = SweepMap::new(&words, &normals, w, h, 5.0);
+        let map = SweepMap::new(&words, &normals, w, h, SpsmOptions::PAPER.gradient_code);
         let cpu = map.sweep();
         let mut by_status = [0usize; 4];
         let (mut differ, mut tie_breaks) = (0, 0);
@@ -260,7 +260,7 @@ fn sgsm_bits_agree_with_ray_cast() {
     }
     let paths = renderer.take_sgsm_counts().unwrap().expect("counting");
     eprintln!("misclassified: standard {}, spsm {}, sgsm {}; sgsm paths {paths:?}", counts[0], counts[1], counts[2]);
-    // Measured (lavapipe and GL): standard 439, SPSM 244, SGSM 244 (issue 16, session 5:
+    // Measured (lavapipe and GL): standard 439, SPSM 233, SGSM 233 (issue 16, session 6, the log-polar gradient code; session 5: 244 and 244 with
     // the standard fallback; session 4: 254 and 254 with SPSM's own-plane rule; before
     // it SPSM 305, SGSM 289).
     assert!(counts[2] <= counts[1], "SGSM no worse than SPSM: {counts:?}");

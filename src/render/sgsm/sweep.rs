@@ -81,14 +81,14 @@ pub fn decode_normal(word: u32, map: [u32; 2]) -> DVec2 {
 impl SweepMap {
     /// From the readbacks of one light: SPSM words and normal words.
     #[must_use]
-    pub fn new(words: &[[u32; 4]], normals: &[u32], width: u32, height: u32, exponent: f64) -> Self {
+    pub fn new(words: &[[u32; 4]], normals: &[u32], width: u32, height: u32, code: packing::GradientCode) -> Self {
         let texels = words
             .iter()
             .zip(normals)
             .enumerate()
             .map(|(i, (w, n))| {
                 let texel = [i as u32 % width, i as u32 / width];
-                match packing::unpack(*w, texel, [width, height], exponent) {
+                match packing::unpack(*w, texel, [width, height], code) {
                     Some(spsm) => SweepTexel::Triangle(Stored {
                         spsm,
                         centre: DVec2::new(f64::from(texel[0]) + 0.5, f64::from(texel[1]) + 0.5),

@@ -27,6 +27,8 @@ pub mod packing;
 
 use std::hash::{Hash, Hasher};
 
+pub use packing::GradientCode;
+
 /// Format of the SPSM texels (the mode's colour array).
 pub(crate) const TEXEL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
@@ -36,9 +38,10 @@ pub(crate) const TEXEL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32
 /// set of pipelines per distinct value).
 #[derive(Clone, Copy, Debug)]
 pub struct SpsmOptions {
-    /// Exponent `n` of the paper's power quantization of the depth
-    /// derivatives (eq. 3); the paper uses 5, 1 is linear.
-    pub exponent: f32,
+    /// How the texel holds the plane's depth derivatives: the paper's
+    /// power quantization (eq. 3, [`GradientCode::Power`]) or the log-polar
+    /// code (the default since issue 16, session 6; see [`GradientCode`]).
+    pub gradient_code: GradientCode,
     /// Constant depth bias of every plane test, in units of the `[0, 1]`
     /// post-projective depth range (the paper: 1e-5).
     pub bias: f32,
@@ -80,7 +83,11 @@ pub enum StandardFallback {
     /// triangle containing p, or from p's own plane, stay SPSM's. Measured
     /// per path on the default preset (issue-16 note, session 5): the
     /// recovery's and the uniform patterns' verdicts were worse than the
-    /// standard's, the triangle paths' better.
+    /// standard's, the triangle paths' better. Also the depth-only texels
+    /// (triangles crossing the light's `w = 0` plane, e.g. a floor under a
+    /// PSM-like warp; session 6): their 16-bit `z / w` with a constant
+    /// bias showed as acne (quick preset, configuration 1: `psm+spsm`
+    /// 3137 misclassified, mostly false shadow, against `psm`'s 373).
     #[default]
     Uncertain,
     /// The standard verdict everywhere: the standard lookup computed from
@@ -97,18 +104,21 @@ impl StandardFallback {
     fn paths(self) -> u32 {
         match self {
             Self::Off => 0,
-            // SPSM_PATH_UNIFORM | SPSM_PATH_RECOVER
-            Self::Uncertain => 16 | 32,
-            Self::Always => 0xff,
+            // SPSM_PATH_UNIFORM | SPSM_PATH_RECOVER | SPSM_PATH_DEPTH_ONLY
+            Self::Uncertain => 16 | 32 | 256,
+            Self::Always => 0xffff,
         }
     }
 }
 
 impl SpsmOptions {
-    /// The paper's settings (exponent 5, bias 1e-5) with the packing
-    /// tolerance; the default.
+    /// The default: the paper's bias (1e-5) with the packing tolerance,
+    /// the log-polar derivative code ([`GradientCode::LogPolar`]; the
+    /// paper's power code lost whole shadows under scene-optimized
+    /// matrices, see [`GradientCode`]) and the hybrid
+    /// [`StandardFallback::Uncertain`].
     pub const PAPER: Self = Self {
-        exponent: 5.0,
+        gradient_code: GradientCode::LogPolar,
         bias: 1e-5,
         packing_tolerance: true,
         thin_casters: false,
@@ -134,7 +144,7 @@ impl Default for SpsmOptions {
 
 impl PartialEq for SpsmOptions {
     fn eq(&self, other: &Self) -> bool {
-        self.exponent.to_bits() == other.exponent.to_bits()
+        code_key(self.gradient_code) == code_key(other.gradient_code)
             && self.bias.to_bits() == other.bias.to_bits()
             && self.packing_tolerance == other.packing_tolerance
             && self.thin_casters == other.thin_casters
@@ -147,7 +157,7 @@ impl Eq for SpsmOptions {}
 impl Hash for SpsmOptions {
     fn hash<H: Hasher>(&self, state: &mut H) {
         (
-            self.exponent.to_bits(),
+            code_key(self.gradient_code),
             self.bias.to_bits(),
             self.packing_tolerance,
             self.thin_casters,
@@ -157,15 +167,29 @@ impl Hash for SpsmOptions {
     }
 }
 
+/// The bits a [`GradientCode`] is compared and hashed by.
+fn code_key(code: GradientCode) -> (u8, u32) {
+    match code {
+        GradientCode::Power { exponent } => (0, exponent.to_bits()),
+        GradientCode::LogPolar => (1, 0),
+    }
+}
+
 /// WGSL constants the SPSM shaders expect before `spsm_common.wgsl`.
 fn constants(options: &SpsmOptions) -> String {
-    // A non-positive or non-finite exponent would make the code
+    // A non-positive or non-finite exponent would make the power code
     // meaningless; the paper's 5 stands in.
-    let exponent = if options.exponent.is_finite() && options.exponent > 0.0 { options.exponent } else { 5.0 };
+    let (kind, exponent) = match options.gradient_code {
+        GradientCode::Power { exponent } if exponent.is_finite() && exponent > 0.0 => (0u32, exponent),
+        GradientCode::Power { .. } => (0, 5.0),
+        GradientCode::LogPolar => (1, 5.0),
+    };
     let bias = if options.bias.is_finite() { options.bias } else { 0.0 };
     let fallback = options.standard_fallback.paths();
     format!(
-        "const SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\nconst SPSM_FALLBACK: u32 = {fallback}u;\n",
+        "const SPSM_GRADIENT_CODE: u32 = {kind}u;\nconst SPSM_LOG_MIN: f32 = {:?};\nconst SPSM_LOG_STEP: f32 = {:?};\nconst SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\nconst SPSM_FALLBACK: u32 = {fallback}u;\n",
+        packing::LOG_MIN as f32,
+        ((packing::LOG_MAX / packing::LOG_MIN).ln() / 253.0) as f32,
         if options.packing_tolerance { 1.0f32 } else { 0.0 },
         options.thin_casters
     )
