@@ -407,6 +407,13 @@ fn overlay(
                 let point = world_from_clip.project_point3(ndc);
                 let direction = (point - eye).as_vec3();
                 let Some(hit) = bvh.closest_hit(&Ray { origin: eye.as_vec3(), direction }, 1.01) else { continue };
+                // A receiver triangle the map cannot project (a vertex at or
+                // behind the light's w = 0 plane: the reference leaves it out)
+                // has no texel position to classify the error by.
+                if position[hit.triangle as usize] == u32::MAX {
+                    *classes.entry("receiver not projected (w <= 0)".to_string()).or_default() += 1;
+                    continue;
+                }
                 // Reference classification of the error.
                 {
                     let p = eye + direction.as_dvec3() * f64::from(hit.t);
@@ -478,6 +485,9 @@ fn overlay(
                             bvh.closest_hit(&Ray { origin: origin.as_vec3(), direction: to_light.as_vec3() }, 1.0);
                         match occ {
                             None => class += " no occluder",
+                            Some(o) if position[o.triangle as usize] == u32::MAX => {
+                                class += " occluder not projected (w <= 0)";
+                            }
                             Some(o) => {
                                 let o = position[o.triangle as usize];
                                 let in_list = (-1..=1)
