@@ -45,6 +45,15 @@ fn worker_map_bytes(config: &ExperimentConfig) -> u64 {
     u64::from(largest).pow(2).saturating_mul(16)
 }
 
+/// Triangles of a generated scene (a scene file's are known only once it
+/// is loaded, after these checks: 0).
+fn generated_triangles(config: &ExperimentConfig) -> u64 {
+    match config.scene {
+        SceneSource::Builtin { triangles } | SceneSource::Large { triangles } => triangles as u64,
+        SceneSource::File { .. } => 0,
+    }
+}
+
 /// The most triangles a scene may have: indices are 32-bit.
 pub(super) const MAX_TRIANGLES: u64 = u32::MAX as u64 / 3;
 
@@ -126,10 +135,7 @@ pub(super) fn check(
             texture("--equivalence (its focused ladder)", largest.max(1024))?;
         }
     }
-    let triangles = match config.scene {
-        SceneSource::Builtin { triangles } | SceneSource::Large { triangles } => triangles as u64,
-        SceneSource::File { .. } => 0,
-    };
+    let triangles = generated_triangles(config);
     if triangles > MAX_TRIANGLES {
         return Err(ExperimentError::TooLarge {
             flag: "--triangles",
@@ -183,10 +189,7 @@ pub(super) fn workers(
     let wanted = if config.jobs == 0 { super::default_jobs() } else { config.jobs };
     let wanted = wanted.min(configs).max(1);
     let Some(available) = available else { return Ok(wanted) };
-    let triangles = match config.scene {
-        SceneSource::Builtin { triangles } | SceneSource::Large { triangles } => triangles as u64,
-        SceneSource::File { .. } => 0,
-    };
+    let triangles = generated_triangles(config);
     let pixels = u64::from(config.screen) * u64::from(config.screen);
     let first = triangles.saturating_mul(BYTES_PER_TRIANGLE).saturating_add(pixels.saturating_mul(BYTES_PER_PIXEL));
     let each = triangles
