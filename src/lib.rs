@@ -48,6 +48,7 @@
 
 mod camera;
 pub mod cascade;
+mod caster_bounds;
 pub mod conventions;
 mod error;
 #[cfg(feature = "cli")]

@@ -4,6 +4,7 @@
 use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Mat4};
 
 use crate::camera::viewport_matrix;
+use crate::caster_bounds::CasterBounds;
 use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::light::{Light, LightFrame};
@@ -292,6 +293,22 @@ pub(crate) fn holds_all(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool {
         })
 }
 
+/// `(min, max)` of `values`; `None` when there are none.
+fn fold_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    values.fold(None, |range, v| match range {
+        None => Some((v, v)),
+        Some((lo, hi)) => Some((v.min(lo), v.max(hi))),
+    })
+}
+
+/// The smallest range holding both ranges (either may be absent).
+fn union(a: Option<(f64, f64)>, b: Option<(f64, f64)>) -> Option<(f64, f64)> {
+    match (a, b) {
+        (Some((a0, a1)), Some((b0, b1))) => Some((a0.min(b0), a1.max(b1))),
+        (range, None) | (None, range) => range,
+    }
+}
+
 /// Everything needed to turn an optical axis into a [`LightMatrix`].
 pub(crate) struct Placement<'a> {
     pub light: Light,
@@ -300,8 +317,11 @@ pub(crate) struct Placement<'a> {
     pub axis: DVec3,
     /// World points that must land inside the map.
     pub focus: &'a [DVec3],
-    /// Further world points that must lie inside the depth range (casters).
+    /// Further world points that must lie inside the depth range.
     pub depth_points: &'a [DVec3],
+    /// The casters that must lie inside the depth range, as half-spaces
+    /// (their extremes bound the range; [`CasterBounds`]).
+    pub casters: Option<&'a CasterBounds>,
     pub map: ShadowMapSize,
     pub fit: &'a AffineFitOptions,
     pub tolerances: &'a Tolerances,
@@ -375,12 +395,20 @@ impl Placement<'_> {
         };
         let (x_row, y_row, w_row) = (g_row(0), g_row(1), g_row(2));
         let pad = self.tolerances.depth_pad;
-        let all_depth = self.focus.iter().chain(self.depth_points);
+        let all_depth = || self.focus.iter().chain(self.depth_points);
+        // The casters' range of the depth function: `w` or `d·x`.
+        let depth_function = match self.frame {
+            LightFrame::Perspective { .. } => w_row,
+            LightFrame::Orthographic { rotation } => rotation.row(2).extend(0.0),
+        };
+        let casters = self.casters.and_then(|c| c.linear_range(depth_function));
+        let caster_depth = casters.map(|(lo, hi, _)| (lo, hi));
         let mut needs_unclipped_depth = false;
         let (z_row, depth) = match self.frame {
             LightFrame::Perspective { .. } => {
-                let ts = all_depth.map(|&p| w_row.dot(p.extend(1.0)));
-                let (lo, hi) = ts.fold((f64::INFINITY, 0.0_f64), |(lo, hi), t| (lo.min(t), hi.max(t)));
+                let points = fold_range(all_depth().map(|&p| w_row.dot(p.extend(1.0))));
+                // `w` is positive in front of the light: the range starts at 0.
+                let (lo, hi) = union(points, caster_depth).map_or((f64::INFINITY, 0.0), |(lo, hi)| (lo, hi.max(0.0)));
                 let far = hi * (1.0 + pad);
                 let mut near = lo * (1.0 - pad);
                 if !(near >= far * self.tolerances.min_near_far_ratio) {
@@ -393,9 +421,8 @@ impl Placement<'_> {
             }
             LightFrame::Orthographic { rotation } => {
                 let d = rotation.row(2);
-                let (lo, hi) = all_depth
-                    .map(|p| d.dot(*p))
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+                let points = fold_range(all_depth().map(|p| d.dot(*p)));
+                let (lo, hi) = union(points, caster_depth).unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
                 let span = (hi - lo)
                     .max(f64::MIN_POSITIVE.sqrt())
                     .max(self.tolerances.min_relative_span * lo.abs().max(hi.abs()));
@@ -406,12 +433,15 @@ impl Placement<'_> {
             }
         };
         let clip_from_world = DMat4::from_cols(x_row, y_row, z_row, w_row).transpose();
-        let (lo, hi) = self
-            .focus
-            .iter()
-            .chain(self.depth_points)
-            .map(|&p| light_distance(&self.frame, p))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+        let points = fold_range(all_depth().map(|&p| light_distance(&self.frame, p)));
+        // A directional light's distance is the depth function itself.
+        let caster_distance = match (self.frame, self.casters, casters) {
+            (LightFrame::Perspective { position, .. }, Some(c), Some((_, _, nearest))) => {
+                c.distance_range(position, w_row.truncate(), nearest)
+            }
+            _ => caster_depth,
+        };
+        let (lo, hi) = union(points, caster_distance).unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
         let span = (hi - lo).max(self.tolerances.min_relative_span * lo.abs().max(hi.abs()).max(f64::MIN_POSITIVE));
         let light_distance = LightDistance { min: lo - pad * span, max: hi + pad * span };
         LightMatrix {

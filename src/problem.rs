@@ -4,6 +4,7 @@
 use glam::DVec3;
 
 use crate::camera::Camera;
+use crate::caster_bounds::CasterBounds;
 use crate::error::{check_range, Result};
 use crate::fit::AffineFitOptions;
 use crate::geometry::{ConvexPolyhedron, Plane};
@@ -419,6 +420,21 @@ impl ShadowProblem {
         LightFrame::new(&self.light, forward)
     }
 
+    /// The caster body of `focus` ([`Self::caster_body`]) as its box and
+    /// half-spaces, for the depth range (no body is built).
+    pub(crate) fn caster_bounds_into(&self, focus: &ConvexPolyhedron, out: &mut CasterBounds, ws: &mut SolveWorkspace) {
+        out.clear();
+        if focus.is_empty() {
+            return;
+        }
+        self.towards_light_planes_into(focus, &mut out.planes, ws);
+        let focus_far = match self.light.position() {
+            Some(l) => focus.vertices().iter().map(|v| v.distance(l)).fold(0.0, f64::max),
+            None => 0.0,
+        };
+        out.set(self.bounds.casters.min, self.bounds.casters.max, focus_far, self.eps());
+    }
+
     /// Builds the matrix for axis `axis` (light coordinates of `frame`)
     /// around `focus`, with depth covering the casters of `focus`.
     pub(crate) fn place(
@@ -430,21 +446,21 @@ impl ShadowProblem {
         fallback: Option<Fallback>,
         ws: &mut SolveWorkspace,
     ) -> Result<LightMatrix> {
-        let mut casters = ws.take_body();
-        self.caster_body_into(focus, &mut casters, ws);
+        let mut casters = CasterBounds::new(ws.take_planes());
+        self.caster_bounds_into(focus, &mut casters, ws);
         let result = self.place_with_casters(frame, axis, focus, &casters, method, fallback, ws);
-        ws.put_body(casters);
+        ws.put_planes(casters.into_planes());
         result
     }
 
-    /// [`Self::place`] with the caster body of `focus` already computed.
+    /// [`Self::place`] with the casters of `focus` already bounded.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn place_with_casters(
         &self,
         frame: LightFrame,
         axis: DVec3,
         focus: &ConvexPolyhedron,
-        casters: &ConvexPolyhedron,
+        casters: &CasterBounds,
         method: Method,
         fallback: Option<Fallback>,
         ws: &mut SolveWorkspace,
@@ -453,25 +469,24 @@ impl ShadowProblem {
         self.mappable_vertices_into(focus, &mut points, ws);
         // Depth covers the casters and all of `focus`, a vertex at the light
         // included (then near is clamped and unclipped depth requested).
-        let mut depth_points = ws.take_points();
-        depth_points.extend_from_slice(casters.vertices());
-        depth_points.extend_from_slice(focus.vertices());
-        let result = self.placement(frame, axis, &points, &depth_points, method, fallback).build_in(ws);
-        ws.put_points(depth_points);
+        let result =
+            self.placement(frame, axis, &points, focus.vertices(), Some(casters), method, fallback).build_in(ws);
         ws.put_points(points);
         result
     }
 
     /// The one constructor of a [`Placement`] for this problem: its light,
     /// map size, fit options and tolerances, with `focus` the world points
-    /// the map must hold and `depth_points` the further points (casters)
-    /// its depth range must hold.
+    /// the map must hold, and `depth_points` the further points and
+    /// `casters` the caster body its depth range must hold.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn placement<'a>(
         &'a self,
         frame: LightFrame,
         axis: DVec3,
         focus: &'a [DVec3],
         depth_points: &'a [DVec3],
+        casters: Option<&'a CasterBounds>,
         method: Method,
         fallback: Option<Fallback>,
     ) -> Placement<'a> {
@@ -481,6 +496,7 @@ impl ShadowProblem {
             axis,
             focus,
             depth_points,
+            casters,
             map: self.map,
             fit: &self.fit,
             tolerances: &self.tolerances,

@@ -23,6 +23,7 @@
 
 mod clip;
 mod cone;
+mod lp;
 mod plane;
 mod polyhedron;
 mod validation;
@@ -30,7 +31,9 @@ mod validation;
 pub use clip::ClipWorkspace;
 pub(crate) use cone::min_enclosing_cone_in;
 pub use cone::{min_enclosing_cone, Cone};
+pub(crate) use lp::maximize_in_box;
 pub use plane::Plane;
+pub(crate) use polyhedron::padded_box;
 pub use polyhedron::{ConvexPolyhedron, Face};
 
 use glam::DVec3;

@@ -730,7 +730,7 @@ impl ConvexPolyhedron {
 
 /// The valid box `[min, max]` with flat axes padded (see
 /// [`ConvexPolyhedron::from_aabb`]); `None` when inverted or not finite.
-fn padded_box(min: DVec3, max: DVec3) -> Option<(DVec3, DVec3)> {
+pub(crate) fn padded_box(min: DVec3, max: DVec3) -> Option<(DVec3, DVec3)> {
     let extent = max - min;
     if !(min.is_finite() && max.is_finite() && extent.is_finite()) || min.cmpgt(max).any() {
         return None;

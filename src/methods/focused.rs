@@ -5,6 +5,7 @@
 //! the projection of the scene; lixel fits the map around `V ∩ R ∩ L`, whose
 //! projection lies inside that intersection, so the map is never larger.
 
+use crate::caster_bounds::CasterBounds;
 use crate::error::{LixelError, Result};
 use crate::geometry::ConvexPolyhedron;
 use crate::matrix::{Fallback, LightMatrix, Method};
@@ -53,7 +54,7 @@ fn around(
 pub(crate) fn from_bodies(
     problem: &ShadowProblem,
     focus: &ConvexPolyhedron,
-    casters: &ConvexPolyhedron,
+    casters: &CasterBounds,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     if focus.is_empty() {

@@ -25,6 +25,7 @@
 
 use glam::{DMat3, DVec2, DVec3};
 
+use crate::caster_bounds::CasterBounds;
 use crate::error::{LixelError, Result};
 use crate::geometry::ConvexPolyhedron;
 use crate::light::LightFrame;
@@ -104,18 +105,16 @@ fn solve_for(
         SnapGrid { axis, basis, map: problem.map_size(), steps_per_octave: options.steps_per_octave, margin: 0.0 };
     // Depth covers the casters and all of the focus, a vertex at the light
     // included (as for the other uniform maps).
-    let mut casters = ws.take_body();
-    let mut depth_points = ws.take_points();
+    let mut casters = CasterBounds::new(ws.take_planes());
     let result = snapped_homography(&frame, problem.tolerances(), &grid, &xs)
         .ok_or(LixelError::NotInFront { method })
         .and_then(|homography| {
-            problem.caster_body_into(focus, &mut casters, ws);
-            depth_points.extend_from_slice(casters.vertices());
-            depth_points.extend_from_slice(focus.vertices());
-            problem.placement(frame, axis, &points, &depth_points, method, None).finish_checked(homography, &xs)
+            problem.caster_bounds_into(focus, &mut casters, ws);
+            problem
+                .placement(frame, axis, &points, focus.vertices(), Some(&casters), method, None)
+                .finish_checked(homography, &xs)
         });
-    ws.put_points(depth_points);
-    ws.put_body(casters);
+    ws.put_planes(casters.into_planes());
     ws.put_points(xs);
     ws.put_points(points);
     result

@@ -28,6 +28,7 @@
 
 use glam::{DMat4, DVec3, DVec4};
 
+use crate::caster_bounds::CasterBounds;
 use crate::error::Result;
 use crate::geometry::{min_enclosing_cone_in, ConvexPolyhedron};
 use crate::light::LightFrame;
@@ -175,15 +176,12 @@ fn place(
     // Depth covers the casters of the visible receivers and all of `region`
     // (for `H`, which holds casters itself, the light included when it lies
     // in `S`: such a map needs unclipped depth).
-    let mut casters = ws.take_body();
-    problem.caster_body_into(focus, &mut casters, ws);
-    let mut depth_points = more;
-    depth_points.clear();
-    depth_points.extend_from_slice(casters.vertices());
-    depth_points.extend_from_slice(region.vertices());
-    ws.put_body(casters);
-    let result = problem.placement(frame, axis, &points, &depth_points, Method::Psm, fallback).build_in(ws);
-    ws.put_points(depth_points);
+    ws.put_points(more);
+    let mut casters = CasterBounds::new(ws.take_planes());
+    problem.caster_bounds_into(focus, &mut casters, ws);
+    let result =
+        problem.placement(frame, axis, &points, region.vertices(), Some(&casters), Method::Psm, fallback).build_in(ws);
+    ws.put_planes(casters.into_planes());
     ws.put_points(points);
     result
 }

@@ -580,8 +580,8 @@ impl Optimizer {
 
     fn finish(&self, samples: &Samples, homography: DMat3) -> LightMatrix {
         // `finish` folds the depth over `focus` then `depth_points`: the
-        // bodies' vertices, then every relevant sample (kept once, not
-        // copied into a second list per pixel).
+        // receivers' body's vertices, then every relevant sample (kept once,
+        // not copied into a second list per pixel), and the casters' bounds.
         samples
             .problem
             .placement(
@@ -589,6 +589,7 @@ impl Optimizer {
                 homography.row(2),
                 &samples.depth_points,
                 &samples.relevant_world,
+                Some(&samples.casters),
                 Method::Optimized,
                 None,
             )

@@ -3,6 +3,7 @@
 
 use glam::{DMat2, DVec3};
 
+use crate::caster_bounds::CasterBounds;
 use crate::error::{LixelError, Result};
 use crate::light::LightFrame;
 use crate::matrix::LightMatrix;
@@ -150,8 +151,11 @@ pub struct Samples {
     pub(crate) relevant_world: Vec<DVec3>,
     /// World points whose depth the map must cover besides the relevant
     /// samples (`relevant_world`, which follow them in the depth fold): the
-    /// vertices of the visible receivers' body and of its casters.
+    /// vertices of the visible receivers' body.
     pub(crate) depth_points: Vec<DVec3>,
+    /// The casters of the visible receivers' body, whose depth the map must
+    /// cover too.
+    pub(crate) casters: CasterBounds,
     pub(crate) counts: SampleCounts,
 }
 
@@ -166,6 +170,7 @@ impl Samples {
             relevant: Vec::new(),
             relevant_world: Vec::new(),
             depth_points: Vec::new(),
+            casters: CasterBounds::default(),
             counts: SampleCounts::default(),
         };
         samples.reset(problem);
@@ -177,15 +182,13 @@ impl Samples {
     /// matrix, keeping the buffers.
     fn reset(&mut self, problem: &ShadowProblem) {
         with_workspace(|ws| {
-            let (mut focus, mut casters) = (ws.take_body(), ws.take_body());
+            let mut focus = ws.take_body();
             problem.visible_receiver_body_into(&mut focus, ws);
             self.frame = problem.frame_towards(&focus);
-            problem.caster_body_into(&focus, &mut casters, ws);
-            self.focused = crate::methods::focused::from_bodies(problem, &focus, &casters, ws);
+            problem.caster_bounds_into(&focus, &mut self.casters, ws);
+            self.focused = crate::methods::focused::from_bodies(problem, &focus, &self.casters, ws);
             self.depth_points.clear();
-            self.depth_points.extend_from_slice(casters.vertices());
             self.depth_points.extend_from_slice(focus.vertices());
-            ws.put_body(casters);
             ws.put_body(focus);
         });
         self.problem = problem.clone();

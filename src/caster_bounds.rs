@@ -1,0 +1,126 @@
+//! The depth range of a caster body without building the body.
+//!
+//! A map's depth row must hold every caster of its receivers: the body
+//! `conv(F ∪ l) ∩ C` (positional lights) or `F` extruded towards the light
+//! `∩ C` (directional), with `C` the casters' box. Clipping `C` by the
+//! towards-light planes builds it exactly, yet the depth row reads only the
+//! extremes of a few functions over it. [`CasterBounds`] keeps the box and
+//! the planes and answers those extremes directly:
+//! - linear functions (the projective `w`, a directional light's `d·x`):
+//!   their exact minimum and maximum, as two small linear programs
+//!   ([`crate::geometry::maximize_in_box`]);
+//! - a positional light's distance `|x - l|`: its maximum over the body is
+//!   at most the farthest focus vertex (the body lies in `conv(F ∪ l)`, and
+//!   a convex function peaks at a vertex, `l` itself being at distance 0);
+//!   its minimum is bounded from below by the largest of `0`, the distance
+//!   from `l` to the box and `min u·(x - l)` over the body for two unit
+//!   directions `u` (each a linear program; `|x - l| >= u·(x - l)`), so the
+//!   range may be wider than the body's, never narrower.
+//!
+//! Every extreme is widened by [`WIDEN`] plane tolerances (times the
+//! function's gradient length): the clipped body puts its vertices within a
+//! tolerance of its planes, and where two planes meet at a small angle a
+//! corner moves by the tolerance over the angle's sine; the linear programs
+//! allow the same tolerance. The range so holds every vertex of the body
+//! [`crate::ShadowProblem::caster_body`] builds (tested against it) and is
+//! within a few tolerances of its vertex range for the linear functions.
+
+use glam::{DVec3, DVec4};
+
+use crate::geometry::{maximize_in_box, padded_box, Plane};
+
+/// How many plane tolerances every extreme is widened by.
+const WIDEN: f64 = 64.0;
+
+/// How many plane tolerances the half-spaces are grown by for the linear
+/// programs: the clip keeps vertices within one tolerance outside a plane,
+/// which a plane at a grazing angle turns into a long way along it.
+const GROW: f64 = 2.0;
+
+/// The caster body of one focus body, kept as the half-spaces that bound it.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CasterBounds {
+    /// The casters' box, padded as [`crate::geometry::ConvexPolyhedron::from_aabb`]
+    /// pads it; `None` when there are no casters (empty focus, invalid box or
+    /// planes).
+    region: Option<(DVec3, DVec3)>,
+    /// The focus body's towards-light planes (already grown).
+    pub(crate) planes: Vec<Plane>,
+    /// The largest distance of a focus vertex from a positional light.
+    focus_far: f64,
+    /// The problem's plane tolerance.
+    eps: f64,
+}
+
+impl CasterBounds {
+    /// No casters, with `planes` as the plane buffer (cleared).
+    pub(crate) fn new(mut planes: Vec<Plane>) -> Self {
+        planes.clear();
+        Self { region: None, planes, focus_far: 0.0, eps: 0.0 }
+    }
+
+    /// The plane buffer, for reuse.
+    pub(crate) fn into_planes(self) -> Vec<Plane> {
+        self.planes
+    }
+
+    /// No casters (an empty focus body).
+    pub(crate) fn clear(&mut self) {
+        self.region = None;
+        self.planes.clear();
+    }
+
+    /// The box `[min, max]` cut by [`planes`](Self::planes) (filled by the
+    /// caller), with `focus_far` the farthest focus vertex's distance from a
+    /// positional light and `eps` the plane tolerance. A box that is
+    /// inverted or not finite, or a plane that is not finite, leaves no
+    /// casters, as clipping by them would.
+    pub(crate) fn set(&mut self, min: DVec3, max: DVec3, focus_far: f64, eps: f64) {
+        let finite = self.planes.iter().all(Plane::is_finite);
+        self.region = padded_box(min, max).filter(|_| finite);
+        self.focus_far = focus_far;
+        self.eps = eps;
+    }
+
+    /// The widening of an extreme of a function with gradient `c`.
+    fn widening(&self, c: DVec3) -> f64 {
+        WIDEN * self.eps * c.length()
+    }
+
+    /// A point of the body maximizing `c·x`; `None` when the body is empty.
+    /// Should rounding give a point that is not finite, the box corner
+    /// (a bound over the whole box) is returned instead.
+    fn argmax(&self, c: DVec3) -> Option<DVec3> {
+        let (min, max) = self.region?;
+        let x = maximize_in_box(min, max, &self.planes, GROW * self.eps, c, self.eps)?;
+        Some(if x.is_finite() { x } else { DVec3::select(c.cmpge(DVec3::ZERO), max, min) })
+    }
+
+    /// `(min, max)` of `h·[x, 1]` over the body, widened, and a point of
+    /// the body where the minimum is reached; `None` when there are no
+    /// casters.
+    pub(crate) fn linear_range(&self, h: DVec4) -> Option<(f64, f64, DVec3)> {
+        let c = h.truncate();
+        let hi = self.argmax(c)?;
+        let lo = self.argmax(-c)?;
+        let widen = self.widening(c);
+        Some((c.dot(lo) + h.w - widen, c.dot(hi) + h.w + widen, lo))
+    }
+
+    /// `(min, max)` bounds of `|x - light|` over the body, widened, from
+    /// `nearest`, the body's point where `toward·x` is least (as
+    /// [`linear_range`](Self::linear_range) finds it for a direction from
+    /// the light into the body). `None` when there are no casters.
+    pub(crate) fn distance_range(&self, light: DVec3, toward: DVec3, nearest: DVec3) -> Option<(f64, f64)> {
+        let (min, max) = self.region?;
+        let mut lower = (light.clamp(min, max) - light).length().max(toward.normalize_or_zero().dot(nearest - light));
+        // A second direction, at the first one's nearest point: exact when
+        // that is the body's point nearest the light.
+        let u = (nearest - light).normalize_or_zero();
+        if u != DVec3::ZERO {
+            lower = lower.max(u.dot(self.argmax(-u)? - light));
+        }
+        let widen = self.widening(DVec3::X);
+        Some((lower - widen, self.focus_far + widen))
+    }
+}
