@@ -37,6 +37,9 @@ const WIDEN: f64 = 64.0;
 /// which a plane at a grazing angle turns into a long way along it.
 const GROW: f64 = 2.0;
 
+/// The growth of a second try when the first finds no body.
+const RETRY_GROW: f64 = 1e3;
+
 /// The caster body of one focus body, kept as the half-spaces that bound it.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct CasterBounds {
@@ -50,13 +53,16 @@ pub(crate) struct CasterBounds {
     focus_far: f64,
     /// The problem's plane tolerance.
     eps: f64,
+    /// Whether a focus vertex or the light lies in the box (then the body
+    /// is not empty, whatever rounding makes of the linear programs).
+    known_nonempty: bool,
 }
 
 impl CasterBounds {
     /// No casters, with `planes` as the plane buffer (cleared).
     pub(crate) fn new(mut planes: Vec<Plane>) -> Self {
         planes.clear();
-        Self { region: None, planes, focus_far: 0.0, eps: 0.0 }
+        Self { region: None, planes, focus_far: 0.0, eps: 0.0, known_nonempty: false }
     }
 
     /// The plane buffer, for reuse.
@@ -71,15 +77,26 @@ impl CasterBounds {
     }
 
     /// The box `[min, max]` cut by [`planes`](Self::planes) (filled by the
-    /// caller), with `focus_far` the farthest focus vertex's distance from a
-    /// positional light and `eps` the plane tolerance. A box that is
-    /// inverted or not finite, or a plane that is not finite, leaves no
-    /// casters, as clipping by them would.
-    pub(crate) fn set(&mut self, min: DVec3, max: DVec3, focus_far: f64, eps: f64) {
+    /// caller) for a focus body with vertices `focus`, lit from `light` (a
+    /// positional light's position), with `eps` the plane tolerance. A box
+    /// that is inverted or not finite, or a plane that is not finite, leaves
+    /// no casters, as clipping by them would.
+    pub(crate) fn set(&mut self, min: DVec3, max: DVec3, focus: &[DVec3], light: Option<DVec3>, eps: f64) {
         let finite = self.planes.iter().all(Plane::is_finite);
         self.region = padded_box(min, max).filter(|_| finite);
-        self.focus_far = focus_far;
+        self.focus_far = light.map_or(0.0, |l| focus.iter().map(|v| v.distance(l)).fold(0.0, f64::max));
         self.eps = eps;
+        let Some((min, max)) = self.region else {
+            return;
+        };
+        // A plane whose half-space holds the whole box cannot bind:
+        // dropped (the faces a focus body shares with the box).
+        let (center, half) = (0.5 * (min + max), 0.5 * (max - min));
+        self.planes.retain(|p| p.signed_distance(center) + p.normal.abs().dot(half) > 0.0);
+        // The body holds `(focus ∪ l) ∩ C`.
+        let grown = DVec3::splat(GROW * eps);
+        let in_box = |p: &DVec3| p.cmpge(min - grown).all() && p.cmple(max + grown).all();
+        self.known_nonempty = focus.iter().chain(light.as_ref()).any(in_box);
     }
 
     /// The widening of an extreme of a function with gradient `c`.
@@ -88,12 +105,21 @@ impl CasterBounds {
     }
 
     /// A point of the body maximizing `c·x`; `None` when the body is empty.
-    /// Should rounding give a point that is not finite, the box corner
-    /// (a bound over the whole box) is returned instead.
+    ///
+    /// Near-parallel planes (a light grazing a flat focus) can make the
+    /// body a sliver that rounding calls empty: an empty answer is checked
+    /// once more with the planes grown by [`RETRY_GROW`] tolerances, and a
+    /// body known not to be empty then falls back to the box's corner (a
+    /// bound over the whole box), as does a point that is not finite.
     fn argmax(&self, c: DVec3) -> Option<DVec3> {
         let (min, max) = self.region?;
-        let x = maximize_in_box(min, max, &self.planes, GROW * self.eps, c, self.eps)?;
-        Some(if x.is_finite() { x } else { DVec3::select(c.cmpge(DVec3::ZERO), max, min) })
+        let corner = DVec3::select(c.cmpge(DVec3::ZERO), max, min);
+        let solve = |grow: f64| maximize_in_box(min, max, &self.planes, grow * self.eps, c, self.eps);
+        match solve(GROW).or_else(|| solve(RETRY_GROW)) {
+            Some(x) if x.is_finite() => Some(x),
+            Some(_) => Some(corner),
+            None => self.known_nonempty.then_some(corner),
+        }
     }
 
     /// `(min, max)` of `h·[x, 1]` over the body, widened, and a point of

@@ -428,11 +428,8 @@ impl ShadowProblem {
             return;
         }
         self.towards_light_planes_into(focus, &mut out.planes, ws);
-        let focus_far = match self.light.position() {
-            Some(l) => focus.vertices().iter().map(|v| v.distance(l)).fold(0.0, f64::max),
-            None => 0.0,
-        };
-        out.set(self.bounds.casters.min, self.bounds.casters.max, focus_far, self.eps());
+        let (min, max) = (self.bounds.casters.min, self.bounds.casters.max);
+        out.set(min, max, focus.vertices(), self.light.position(), self.eps());
     }
 
     /// Builds the matrix for axis `axis` (light coordinates of `frame`)
