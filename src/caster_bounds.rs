@@ -70,6 +70,16 @@ impl CasterBounds {
         self.planes
     }
 
+    /// Makes these bounds equal to `other`, reusing the plane buffer.
+    pub(crate) fn copy_from(&mut self, other: &Self) {
+        self.planes.clear();
+        self.planes.extend_from_slice(&other.planes);
+        self.region = other.region;
+        self.focus_far = other.focus_far;
+        self.eps = other.eps;
+        self.known_nonempty = other.known_nonempty;
+    }
+
     /// No casters (an empty focus body).
     pub(crate) fn clear(&mut self) {
         self.region = None;
@@ -148,5 +158,11 @@ impl CasterBounds {
         }
         let widen = self.widening(DVec3::X);
         Some((lower - widen, self.focus_far + widen))
+    }
+}
+
+impl crate::workspace::CopyFrom for CasterBounds {
+    fn copy_from(&mut self, other: &Self) {
+        CasterBounds::copy_from(self, other);
     }
 }

@@ -427,9 +427,14 @@ impl ShadowProblem {
         if focus.is_empty() {
             return;
         }
+        let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
+        if ws.caster_bounds.get_into(&key, focus, out) {
+            return;
+        }
         self.towards_light_planes_into(focus, &mut out.planes, ws);
         let (min, max) = (self.bounds.casters.min, self.bounds.casters.max);
         out.set(min, max, focus.vertices(), self.light.position(), self.eps());
+        ws.caster_bounds.store(key, focus, out);
     }
 
     /// Builds the matrix for axis `axis` (light coordinates of `frame`)

@@ -34,6 +34,7 @@ use std::cell::Cell;
 use glam::{DMat4, DVec2, DVec3};
 
 use crate::camera::Camera;
+use crate::caster_bounds::CasterBounds;
 use crate::fit::FitWorkspace;
 use crate::geometry::{ClipWorkspace, ConvexPolyhedron, Plane};
 use crate::light::Light;
@@ -67,7 +68,9 @@ pub struct SolveWorkspace {
     points: Vec<Vec<DVec3>>,
     planes: Vec<Vec<Plane>>,
     pub(crate) view: ViewCache,
-    pub(crate) casters: CasterCache,
+    pub(crate) casters: CasterCache<ConvexPolyhedron>,
+    /// The same for the casters' bounds (the solves' depth range).
+    pub(crate) caster_bounds: CasterCache<CasterBounds>,
 }
 
 impl Default for SolveWorkspace {
@@ -102,6 +105,7 @@ impl SolveWorkspace {
             planes: Vec::new(),
             view: ViewCache { enabled, ..ViewCache::default() },
             casters: CasterCache { enabled, ..CasterCache::default() },
+            caster_bounds: CasterCache { enabled, ..CasterCache::default() },
         }
     }
 
@@ -285,7 +289,7 @@ impl ViewCache {
 /// every solve (random cameras, many lights through one workspace) then
 /// pays a key comparison per solve, not two body copies.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct CasterCache {
+pub(crate) struct CasterCache<T> {
     enabled: bool,
     /// The key of the last caster body built.
     seen: Option<CasterKey>,
@@ -293,7 +297,19 @@ pub(crate) struct CasterCache {
     key: Option<CasterKey>,
     /// The body the casters were found for (compared bit for bit).
     focus: ConvexPolyhedron,
-    casters: ConvexPolyhedron,
+    casters: T,
+}
+
+/// A cached value copied in and out reusing its buffers.
+pub(crate) trait CopyFrom {
+    /// Makes `self` equal to `other`.
+    fn copy_from(&mut self, other: &Self);
+}
+
+impl CopyFrom for ConvexPolyhedron {
+    fn copy_from(&mut self, other: &Self) {
+        ConvexPolyhedron::copy_from(self, other);
+    }
 }
 
 /// The inputs of a caster body besides the body it is built around: the
@@ -332,10 +348,10 @@ pub(crate) fn light_bits(light: &Light) -> [u64; 8] {
     }
 }
 
-impl CasterCache {
-    /// Copies the cached caster body into `out` if it was built for `key`
-    /// around a body bit-equal to `focus`; returns whether it was.
-    pub(crate) fn get_into(&self, key: &CasterKey, focus: &ConvexPolyhedron, out: &mut ConvexPolyhedron) -> bool {
+impl<T: CopyFrom> CasterCache<T> {
+    /// Copies the cached casters into `out` if they were found for `key`
+    /// around a body bit-equal to `focus`; returns whether they were.
+    pub(crate) fn get_into(&self, key: &CasterKey, focus: &ConvexPolyhedron, out: &mut T) -> bool {
         let hit = self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
         if hit {
             out.copy_from(&self.casters);
@@ -343,9 +359,9 @@ impl CasterCache {
         hit
     }
 
-    /// Notes that `casters` was built for `key` around `focus`; keeps the
-    /// bodies when the previous one was built for the same key.
-    pub(crate) fn store(&mut self, key: CasterKey, focus: &ConvexPolyhedron, casters: &ConvexPolyhedron) {
+    /// Notes that `casters` were found for `key` around `focus`; keeps them
+    /// when the previous ones were found for the same key.
+    pub(crate) fn store(&mut self, key: CasterKey, focus: &ConvexPolyhedron, casters: &T) {
         if !self.enabled {
             return;
         }
