@@ -183,7 +183,10 @@ impl Bvh {
         if slab(ray.origin, inv, root.min, root.max, t_max).is_none() {
             return;
         }
-        // Each entry: a node and the limit it passed its box test with.
+        // Each entry: a node and the limit it passed its box test with. The
+        // build splits every range at its median, so the tree is at most
+        // ⌈log2 n⌉ + 1 ≤ 33 levels deep (`u32` indices), and a depth-first
+        // walk holds at most one entry per level plus one: 64 never fills.
         let mut stack = [(0u32, t_max); 64];
         let mut top = 1;
         while top > 0 {
@@ -208,6 +211,7 @@ impl Bvh {
             let dr = slab(ray.origin, inv, self.nodes[r].min, self.nodes[r].max, t_max);
             // Push the farther child first so the nearer one is visited next.
             let mut push = |i: usize| {
+                debug_assert!(top < stack.len(), "BVH deeper than its median build allows");
                 if top < stack.len() {
                     stack[top] = (i as u32, t_max);
                     top += 1;
