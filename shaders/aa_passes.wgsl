@@ -9,19 +9,22 @@
 //    clipped to w > 0 and to the map and walked texel by texel (every texel
 //    the segment crosses is marked: a supercover walk).
 // 2. `sat_rows`, `sat_cols`: the inclusive summed-area table of the mask.
-// 2b. `uncertain_tiles`: pixels whose standard depth compare is uncertain
-//    (`depth_uncertain`) force the tiles of their footprint active, so
-//    that they can take the exact path too.
+// 2b. `classify`: one invocation per pixel: the pixel's facet (tangent
+//    plane from the camera pass's depth and normal) and its light-space
+//    footprint; a pixel with a silhouette texel in it, or whose standard
+//    depth compare is uncertain (`depth_uncertain`; it also forces its
+//    footprint's tiles active, so that they get lists), is marked for the
+//    exact path; every other pixel will keep the standard bit.
 // 3. `tile_count`, `tile_scan`, `tile_write`: triangle lists of TILE x TILE
 //    texel tiles. A tile is *active* when its neighbourhood (the tile grown
 //    by two tiles each side) holds a silhouette texel; a triangle enters
 //    the list of every active tile its projected bounding box touches.
-// 4. `visibility`: one invocation per pixel: the pixel's facet (tangent plane
-//    from the camera pass's depth and normal), its light-space footprint;
-//    no silhouette texel in it -> the standard bit in every sample; else
-//    the pixel is queued, and `visibility_exact` (one invocation per queued
-//    pixel) finds the facet on its triangle's plane, and every triangle of its tiles clips the facet's samples through four
-//    half-plane table lookups, ANDed per triangle, ORed over triangles.
+// 4. `visibility`: one invocation per pixel: the standard bit in every
+//    sample; a marked pixel whose tiles can serve it is queued, and
+//    `visibility_exact` (one invocation per queued pixel) finds the facet
+//    on its triangle's plane, and every triangle of its tiles clips the
+//    facet's samples through four half-plane table lookups, ANDed per
+//    triangle, ORed over triangles.
 //    Each list entry is first culled against the pixel's footprint with the
 //    triangle's own box (written by `tile_count_pass` after the lists, grown
 //    by the lists' texel) and tested in one tile only (the tile of the
@@ -871,48 +874,60 @@ fn depth_uncertain(pixel: Pixel, light: Light) -> bool {
     return diff > -(b + sigma) && diff < max(b - 1.5 * sigma, 0.0);
 }
 
-// One invocation per pixel, before the lists: a facing pixel off the
-// silhouettes whose depth compare is uncertain forces its footprint's
-// tiles active and leaves 1 in its validity word for `visibility` (0
-// otherwise; `visibility` overwrites both).
+// Why a pixel may take the exact path (`classify` -> `visibility`).
+const KIND_SILHOUETTE: u32 = 1u;
+const KIND_UNCERTAIN: u32 = 2u;
+
+// Classification, one invocation per pixel, before the lists: a facing
+// pixel whose footprint holds a silhouette texel, or whose depth compare is
+// uncertain (`depth_uncertain`; such a pixel also forces its footprint's
+// tiles active), leaves its kind and footprint tiles in its two words for
+// `visibility` (tile indices below 2^14: maps narrower than 2^17 texels);
+// every other pixel leaves 0 in the first.
 @compute @workgroup_size(64)
-fn uncertain_tiles(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn classify(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = flat_id(gid, groups);
     let pixels = params.width * params.height;
     if id >= pixels {
         return;
     }
-    let flag = params.valid_base + params.light * pixels + id;
-    occlusion[flag] = 0u;
+    let out = params.light * pixels + id;
+    occlusion[out] = 0u;
     let words = textureLoad(camera_masks, vec2<u32>(id % params.width, id / params.width), 0);
-    if params.uncertain == 0u || (words.z & (1u << params.light)) == 0u || bitcast<f32>(words.x) >= 1.0 {
+    if (words.z & (1u << params.light)) == 0u || bitcast<f32>(words.x) >= 1.0 {
         return;
     }
     let light = lights.items[params.light];
     let pixel = pixel_facet(id, words, light);
-    if pixel.exact || !pixel.fp.ok || pixel.t.x > pixel.t.z {
-        return;
-    }
     let t = pixel.t;
-    if u32((t.z - t.x + 1) * (t.w - t.y + 1)) > MAX_FOOTPRINT_TILES || !depth_uncertain(pixel, light) {
+    if !pixel.fp.ok || t.x > t.z {
         return;
     }
-    occlusion[flag] = 1u;
-    for (var ty = t.y; ty <= t.w; ty++) {
-        for (var tx = t.x; tx <= t.z; tx++) {
-            atomicStore(&tile_words[forced_slot(u32(ty) * params.tiles_x + u32(tx))], 1u);
+    var kind = KIND_SILHOUETTE;
+    if !pixel.exact {
+        if params.uncertain == 0u || u32((t.z - t.x + 1) * (t.w - t.y + 1)) > MAX_FOOTPRINT_TILES
+            || !depth_uncertain(pixel, light) {
+            return;
+        }
+        kind = KIND_UNCERTAIN;
+        for (var ty = t.y; ty <= t.w; ty++) {
+            for (var tx = t.x; tx <= t.z; tx++) {
+                atomicStore(&tile_words[forced_slot(u32(ty) * params.tiles_x + u32(tx))], 1u);
+            }
         }
     }
+    occlusion[out] = u32(t.x) | (u32(t.y) << 14u) | (kind << 28u);
+    occlusion[params.valid_base + out] = u32(t.z) | (u32(t.w) << 14u);
 }
 
-// Classification, one invocation per pixel: every pixel gets its standard
-// bit in every sample; a pixel whose footprint holds a silhouette texel and
-// (or whose depth compare `uncertain_tiles` found uncertain) and
-// whose tiles can serve it is queued (its index appended to the queue in
-// `tile_list`, counted in STAT_QUEUE) for `visibility_exact`, which then
-// runs over the queued pixels only: they are a few percent of the screen
-// and lie in runs along shadow edges, so the expensive path no longer runs
-// in SIMD lanes beside pixels that left early.
+// After the lists, one invocation per pixel: every pixel gets its standard
+// bit in every sample; a pixel `classify` found (a silhouette texel in its
+// footprint or an uncertain depth compare) whose tiles can serve it is
+// queued (its index appended to the queue in `tile_list`, counted in
+// STAT_QUEUE) for `visibility_exact`, which then runs over the queued
+// pixels only: they are a few percent of the screen and lie in runs along
+// shadow edges, so the expensive path no longer runs in SIMD lanes beside
+// pixels that left early.
 @compute @workgroup_size(64)
 fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = flat_id(gid, groups);
@@ -921,25 +936,24 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
         return;
     }
     let words = textureLoad(camera_masks, vec2<u32>(id % params.width, id / params.width), 0);
-    let bit = 1u << params.light;
-    let standard = select(0u, ALL_SAMPLES, (words.y & bit) != 0u) & params.sample_mask;
+    let standard = select(0u, ALL_SAMPLES, (words.y & (1u << params.light)) != 0u) & params.sample_mask;
     let out = params.light * pixels + id;
-    let uncertain = occlusion[params.valid_base + out] != 0u;
+    let lo = occlusion[out];
+    let hi = occlusion[params.valid_base + out];
     occlusion[out] = standard;
     occlusion[params.valid_base + out] = params.sample_mask;
-    if (words.z & bit) == 0u || bitcast<f32>(words.x) >= 1.0 {
+    let kind = lo >> 28u;
+    if kind == 0u {
         return;
     }
-    let pixel = pixel_facet(id, words, lights.items[params.light]);
-    if !pixel.exact && !uncertain {
-        return;
-    }
-    let why = tiles_unusable(pixel.t);
+    let field = (1u << 14u) - 1u;
+    let t = vec4<i32>(vec4<u32>(lo & field, (lo >> 14u) & field, hi & field, (hi >> 14u) & field));
+    let why = tiles_unusable(t);
     if why != 0u {
         add_stat(why, 1u);
         return;
     }
-    if !pixel.exact {
+    if kind == KIND_UNCERTAIN {
         add_stat(STAT_UNCERTAIN, 1u);
     }
     let slot = atomicAdd(&tile_words[params.light * STATS_PER_LIGHT + STAT_QUEUE], 1u);

@@ -164,7 +164,7 @@ pub(crate) struct AaPass {
     group0: wgpu::BindGroupLayout,
     group1: wgpu::BindGroupLayout,
     /// silhouette, sat_rows, sat_cols, tile_count_pass, tile_scan, tile_write, visibility,
-    /// visibility_exact, uncertain_tiles.
+    /// visibility_exact, classify.
     pipelines: Vec<wgpu::ComputePipeline>,
     edges: wgpu::Buffer,
     edge_count: u32,
@@ -197,7 +197,7 @@ const ENTRY_POINTS: [&str; 9] = [
     "tile_write",
     "visibility",
     "visibility_exact",
-    "uncertain_tiles",
+    "classify",
 ];
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
