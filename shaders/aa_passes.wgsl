@@ -9,16 +9,22 @@
 //    clipped to w > 0 and to the map and walked texel by texel (every texel
 //    the segment crosses is marked: a supercover walk).
 // 2. `sat_rows`, `sat_cols`: the inclusive summed-area table of the mask.
+// 2b. `classify`: one invocation per pixel: the pixel's facet (tangent
+//    plane from the camera pass's depth and normal) and its light-space
+//    footprint; a pixel with a silhouette texel in it, or whose standard
+//    depth compare is uncertain (`depth_uncertain`; it also forces its
+//    footprint's tiles active, so that they get lists), is marked for the
+//    exact path; every other pixel will keep the standard bit.
 // 3. `tile_count`, `tile_scan`, `tile_write`: triangle lists of TILE x TILE
 //    texel tiles. A tile is *active* when its neighbourhood (the tile grown
 //    by two tiles each side) holds a silhouette texel; a triangle enters
 //    the list of every active tile its projected bounding box touches.
-// 4. `visibility`: one invocation per pixel: the pixel's facet (tangent plane
-//    from the camera pass's depth and normal), its light-space footprint;
-//    no silhouette texel in it -> the standard bit in every sample; else
-//    the pixel is queued, and `visibility_exact` (one invocation per queued
-//    pixel) finds the facet on its triangle's plane, and every triangle of its tiles clips the facet's samples through four
-//    half-plane table lookups, ANDed per triangle, ORed over triangles.
+// 4. `visibility`: one invocation per pixel: the standard bit in every
+//    sample; a marked pixel whose tiles can serve it is queued, and
+//    `visibility_exact` (one invocation per queued pixel) finds the facet
+//    on its triangle's plane, and every triangle of its tiles clips the
+//    facet's samples through four half-plane table lookups, ANDed per
+//    triangle, ORed over triangles.
 //    Each list entry is first culled against the pixel's footprint with the
 //    triangle's own box (written by `tile_count_pass` after the lists, grown
 //    by the lists' texel) and tested in one tile only (the tile of the
@@ -45,6 +51,9 @@ const STAT_WIDE: u32 = 3u;
 const STAT_TESTS: u32 = 4u;
 // Pixels queued for the exact path (`visibility` -> `visibility_exact`).
 const STAT_QUEUE: u32 = 5u;
+// Pixels queued because their depth compare is uncertain (no silhouette
+// texel in the footprint).
+const STAT_UNCERTAIN: u32 = 6u;
 const STATS_PER_LIGHT: u32 = 8u;
 
 struct AaParams {
@@ -77,7 +86,23 @@ struct AaParams {
     // 1: the validity mask on (the default); 0: every sample valid (for
     // tests).
     validity: u32,
+    // 1: pixels whose depth compare is uncertain take the exact path (the
+    // default); 0: only silhouette pixels do (for tests).
+    uncertain: u32,
+    // The shadow pass's bias (`ShadowBias`): constant (linear depth
+    // units), slope scale, clamp (0: none).
+    depth_bias: f32,
+    slope_scale: f32,
+    bias_clamp: f32,
+    // Index of the triangles' screen boxes in `tile_list` (after the map
+    // boxes).
+    screen_base: u32,
+    // 1: the hidden test is gated by the triangle's screen box (the
+    // default); 0: every tested triangle runs it (for tests).
+    gate: u32,
     _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // a.w: 1 when the edge is a silhouette for every light (boundary or
@@ -103,6 +128,8 @@ struct Edge {
 @group(1) @binding(7) var<uniform> table: array<vec4<u32>, 2048>;
 @group(1) @binding(8) var<storage, read_write> occlusion: array<u32>;
 @group(1) @binding(9) var camera_masks: texture_2d<u32>;
+// The frame's shadow maps (the depth compare's), for `depth_uncertain`.
+@group(1) @binding(10) var shadow_maps: texture_2d_array<f32>;
 
 const STATS_WORDS: u32 = 256u;
 
@@ -116,6 +143,11 @@ fn cursor_slot(tile: u32) -> u32 {
 
 fn offset_slot(tile: u32) -> u32 {
     return STATS_WORDS + 2u * params.tile_stride + tile;
+}
+
+// Non-zero when an uncertain pixel's footprint touches the tile.
+fn forced_slot(tile: u32) -> u32 {
+    return STATS_WORDS + 3u * params.tile_stride + tile;
 }
 
 fn add_stat(which: u32, value: u32) {
@@ -269,8 +301,13 @@ fn rect_sum(lo_in: vec2<i32>, hi_in: vec2<i32>) -> u32 {
     return sum;
 }
 
+// A tile gets a triangle list when its neighbourhood holds a silhouette
+// texel or an uncertain pixel's footprint touches it.
 fn tile_active(tile: vec2<i32>) -> bool {
     let t = i32(TILE);
+    if atomicLoad(&tile_words[forced_slot(u32(tile.y) * params.tiles_x + u32(tile.x))]) != 0u {
+        return true;
+    }
     return rect_sum(tile * t - vec2<i32>(2 * t), tile * t + vec2<i32>(3 * t - 1)) > 0u;
 }
 
@@ -336,6 +373,25 @@ fn stored_box(t: u32) -> vec4<f32> {
     );
 }
 
+// A triangle's bounding box on the screen in pixels (xy low, zw high);
+// unbounded when a vertex lies at or behind the eye's plane.
+fn screen_box(t: u32) -> vec4<f32> {
+    let size = vec2<f32>(f32(params.width), f32(params.height));
+    var lo = vec2<f32>(1e30);
+    var hi = vec2<f32>(-1e30);
+    for (var k = 0u; k < 3u; k++) {
+        let clip = camera.clip_from_world * vec4<f32>(vertex(t, k), 1.0);
+        if clip.w <= W_EPS {
+            return vec4<f32>(vec2<f32>(-1e30), vec2<f32>(1e30));
+        }
+        let ndc = clip.xy / clip.w;
+        let p = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * size;
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    return vec4<f32>(lo, hi);
+}
+
 @compute @workgroup_size(64)
 fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let t = flat_id(gid, groups);
@@ -348,6 +404,12 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     tile_list[i + 1u] = bitcast<u32>(b.y);
     tile_list[i + 2u] = bitcast<u32>(b.z);
     tile_list[i + 3u] = bitcast<u32>(b.w);
+    let s = screen_box(t);
+    let j = params.screen_base + 4u * t;
+    tile_list[j] = bitcast<u32>(s.x);
+    tile_list[j + 1u] = bitcast<u32>(s.y);
+    tile_list[j + 2u] = bitcast<u32>(s.z);
+    tile_list[j + 3u] = bitcast<u32>(s.w);
     let r = triangle_tiles(b);
     for (var ty = r.y; ty <= r.w; ty++) {
         for (var tx = r.x; tx <= r.z; tx++) {
@@ -738,13 +800,134 @@ fn pixel_facet(id: u32, words: vec4<u32>, light: Light) -> Pixel {
     return out;
 }
 
-// Classification, one invocation per pixel: every pixel gets its standard
-// bit in every sample; a pixel whose footprint holds a silhouette texel and
-// whose tiles can serve it is queued (its index appended to the queue in
-// `tile_list`, counted in STAT_QUEUE) for `visibility_exact`, which then
-// runs over the queued pixels only: they are a few percent of the screen
-// and lie in runs along shadow edges, so the expensive path no longer runs
-// in SIMD lanes beside pixels that left early.
+// Sine of the largest angle between a surface facing the light and the
+// light's rays at which the surface counts as grazing (5 degrees).
+const GRAZING_SIN: f32 = 0.0872;
+
+// The change of linear light depth from the pixel's point to `point +
+// local` (no cancellation of two large distances).
+fn depth_change(light: Light, point: vec3<f32>, local: vec3<f32>) -> f32 {
+    let p = light.position;
+    if p.w > 0.0 {
+        let a = point - p.xyz;
+        return dot(2.0 * a + local, local) / (length(a + local) + length(a)) * light.depth.y;
+    }
+    return dot(local, -p.xyz) * light.depth.y;
+}
+
+// Facet corner `s` of a pixel: its map position relative to the point's
+// (texels, xy) and its linear light depth relative to the point's (z).
+fn corner_in_map(pixel: Pixel, light: Light, s: vec2<f32>, centre: vec2<f32>) -> vec3<f32> {
+    let cols = pixel.facet.cols;
+    let x = cols[0] * s.x + cols[1] * s.y + cols[2];
+    let local = x.xyz / x.w;
+    let texel = to_texel(light.clip_from_world * vec4<f32>(local + pixel.point, 1.0));
+    return vec3<f32>(texel - centre, depth_change(light, pixel.point, local));
+}
+
+// The receiver's linear-depth slope per map texel (the larger of the two
+// axes, as the shadow pass's `dpdx`, `dpdy`), from its facet's footprint;
+// negative when the footprint is degenerate (the facet edge-on to the light).
+fn facet_depth_slope(pixel: Pixel, light: Light, centre: vec2<f32>) -> f32 {
+    let c0 = corner_in_map(pixel, light, vec2<f32>(0.0, 0.0), centre);
+    let e1 = corner_in_map(pixel, light, vec2<f32>(1.0, 0.0), centre) - c0;
+    let e2 = corner_in_map(pixel, light, vec2<f32>(0.0, 1.0), centre) - c0;
+    let det = e1.x * e2.y - e1.y * e2.x;
+    if !(abs(det) > 1e-12) {
+        return -1.0;
+    }
+    // The gradient g with g . e1.xy = e1.z and g . e2.xy = e2.z.
+    let g = vec2<f32>(e1.z * e2.y - e2.z * e1.y, e1.x * e2.z - e2.x * e1.z) / det;
+    return max(abs(g.x), abs(g.y));
+}
+
+// Whether the standard depth compare at a facing pixel whose footprint
+// holds no silhouette texel may still be wrong: the surface grazes the
+// light (within 5 degrees), or the map's depth s at the point's texel lies
+// within the bias band of the receiver's depth r. With the receiver's
+// slope per texel σ and the bias its own plane gets, b = constant + slope
+// scale × σ (clamped as the shadow pass clamps it), its own plane stores
+// at that texel's centre (at most half a texel away on each axis)
+// r + b ± σ. So s − r below max(b − 1.5σ, 0) means another surface wrote
+// the texel from less than a bias above the receiver (a leak: the bias
+// lights a shadowed point) or the receiver's own plane shadows itself
+// (acne), and s − r above −(b + σ) means a shadowing writer lies within a
+// bias of the receiver (a contact). Outside the band the compare is
+// certain, the writer far from the receiver's own plane on one side.
+fn depth_uncertain(pixel: Pixel, light: Light) -> bool {
+    let m = map_position(light, pixel.point);
+    if m.w == 0.0 {
+        return false;
+    }
+    let to_l = normalize(to_light(light, pixel.point));
+    let sigma = facet_depth_slope(pixel, light, m.xy);
+    if abs(dot(pixel.n, to_l)) < GRAZING_SIN || sigma < 0.0 {
+        return true;
+    }
+    var b = params.depth_bias + params.slope_scale * sigma;
+    if params.bias_clamp > 0.0 {
+        b = min(b, params.bias_clamp);
+    }
+    let stored = textureLoad(shadow_maps, map_texel(light, m.xy), light.layer, 0).x;
+    let r = clamp(linear_light_depth(light.position, light.depth.xy, pixel.point), 0.0, 1.0);
+    let diff = stored - r;
+    return diff > -(b + sigma) && diff < max(b - 1.5 * sigma, 0.0);
+}
+
+// Why a pixel may take the exact path (`classify` -> `visibility`).
+const KIND_SILHOUETTE: u32 = 1u;
+const KIND_UNCERTAIN: u32 = 2u;
+
+// Classification, one invocation per pixel, before the lists: a facing
+// pixel whose footprint holds a silhouette texel, or whose depth compare is
+// uncertain (`depth_uncertain`; such a pixel also forces its footprint's
+// tiles active), leaves its kind and footprint tiles in its two words for
+// `visibility` (tile indices below 2^14: maps narrower than 2^17 texels);
+// every other pixel leaves 0 in the first.
+@compute @workgroup_size(64)
+fn classify(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let id = flat_id(gid, groups);
+    let pixels = params.width * params.height;
+    if id >= pixels {
+        return;
+    }
+    let out = params.light * pixels + id;
+    occlusion[out] = 0u;
+    let words = textureLoad(camera_masks, vec2<u32>(id % params.width, id / params.width), 0);
+    if (words.z & (1u << params.light)) == 0u || bitcast<f32>(words.x) >= 1.0 {
+        return;
+    }
+    let light = lights.items[params.light];
+    let pixel = pixel_facet(id, words, light);
+    let t = pixel.t;
+    if !pixel.fp.ok || t.x > t.z {
+        return;
+    }
+    var kind = KIND_SILHOUETTE;
+    if !pixel.exact {
+        if params.uncertain == 0u || u32((t.z - t.x + 1) * (t.w - t.y + 1)) > MAX_FOOTPRINT_TILES
+            || !depth_uncertain(pixel, light) {
+            return;
+        }
+        kind = KIND_UNCERTAIN;
+        for (var ty = t.y; ty <= t.w; ty++) {
+            for (var tx = t.x; tx <= t.z; tx++) {
+                atomicStore(&tile_words[forced_slot(u32(ty) * params.tiles_x + u32(tx))], 1u);
+            }
+        }
+    }
+    occlusion[out] = u32(t.x) | (u32(t.y) << 14u) | (kind << 28u);
+    occlusion[params.valid_base + out] = u32(t.z) | (u32(t.w) << 14u);
+}
+
+// After the lists, one invocation per pixel: every pixel gets its standard
+// bit in every sample; a pixel `classify` found (a silhouette texel in its
+// footprint or an uncertain depth compare) whose tiles can serve it is
+// queued (its index appended to the queue in `tile_list`, counted in
+// STAT_QUEUE) for `visibility_exact`, which then runs over the queued
+// pixels only: they are a few percent of the screen and lie in runs along
+// shadow edges, so the expensive path no longer runs in SIMD lanes beside
+// pixels that left early.
 @compute @workgroup_size(64)
 fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = flat_id(gid, groups);
@@ -753,24 +936,45 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
         return;
     }
     let words = textureLoad(camera_masks, vec2<u32>(id % params.width, id / params.width), 0);
-    let bit = 1u << params.light;
-    let standard = select(0u, ALL_SAMPLES, (words.y & bit) != 0u) & params.sample_mask;
-    occlusion[params.light * pixels + id] = standard;
-    occlusion[params.valid_base + params.light * pixels + id] = params.sample_mask;
-    if (words.z & bit) == 0u || bitcast<f32>(words.x) >= 1.0 {
+    let standard = select(0u, ALL_SAMPLES, (words.y & (1u << params.light)) != 0u) & params.sample_mask;
+    let out = params.light * pixels + id;
+    let lo = occlusion[out];
+    let hi = occlusion[params.valid_base + out];
+    occlusion[out] = standard;
+    occlusion[params.valid_base + out] = params.sample_mask;
+    let kind = lo >> 28u;
+    if kind == 0u {
         return;
     }
-    let pixel = pixel_facet(id, words, lights.items[params.light]);
-    if !pixel.exact {
-        return;
-    }
-    let why = tiles_unusable(pixel.t);
+    let field = (1u << 14u) - 1u;
+    let t = vec4<i32>(vec4<u32>(lo & field, (lo >> 14u) & field, hi & field, (hi >> 14u) & field));
+    let why = tiles_unusable(t);
     if why != 0u {
         add_stat(why, 1u);
         return;
     }
+    if kind == KIND_UNCERTAIN {
+        add_stat(STAT_UNCERTAIN, 1u);
+    }
     let slot = atomicAdd(&tile_words[params.light * STATS_PER_LIGHT + STAT_QUEUE], 1u);
     tile_list[params.queue_base + slot] = id;
+}
+
+// Whether triangle `tri` may hide a sample of pixel `xy` (its top-left
+// corner) from the camera: its screen box meets the pixel grown by a
+// quarter pixel. Its hidden samples are those whose view rays cross it, so
+// they lie inside its screen projection up to the half-plane table's error
+// (under 0.03 px), and the samples lie 1/16 px inside the pixel: a box
+// that misses the grown pixel hides none, and the test can be skipped
+// without changing a word. Always true with the gate off (`params.gate`).
+fn on_screen_near(tri: u32, xy: vec2<f32>) -> bool {
+    if params.gate == 0u {
+        return true;
+    }
+    let i = params.screen_base + 4u * tri;
+    let lo = vec2<f32>(bitcast<f32>(tile_list[i]), bitcast<f32>(tile_list[i + 1u]));
+    let hi = vec2<f32>(bitcast<f32>(tile_list[i + 2u]), bitcast<f32>(tile_list[i + 3u]));
+    return all(lo <= xy + vec2<f32>(1.25)) && all(hi >= xy - vec2<f32>(0.25));
 }
 
 // The exact path, one invocation per queued pixel (the dispatch covers
@@ -819,6 +1023,7 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     // The eye in the facet's frame: a triangle between it and the facet
     // hides the samples behind it (the paper's validity mask).
     let e = vec4<f32>(eye, 1.0);
+    let pixel_xy = vec2<f32>(f32(id % params.width), f32(id / params.width));
     var occluded = 0u;
     var hidden = 0u;
     var tests = 0u;
@@ -840,7 +1045,7 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
                 if (occluded & params.sample_mask) == params.sample_mask {
                     break;
                 }
-                if params.validity != 0u {
+                if params.validity != 0u && on_screen_near(tri, pixel_xy) {
                     hidden |= triangle_mask(v0, v1, v2, facet.cols, e, bias);
                 }
             }

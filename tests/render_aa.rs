@@ -4,7 +4,8 @@
 //! visibility against the ray-cast coverage truth on the tiny scene; the
 //! supersampled standard lookup (`ShadowLookup::Supersampled`, the cost
 //! baseline) against the same truth; the validity mask on a tetrahedron
-//! standing on the floor.
+//! standing on the floor, the hidden test's gate and the exact path of
+//! pixels whose depth compare is uncertain.
 
 #![cfg(all(feature = "render", feature = "cli"))]
 
@@ -112,6 +113,8 @@ fn pair_count_matches_a_cpu_count() {
     let light = test_lights()[0];
     let m = matrices(&scene, &cam, &[light], 128, &Parameterization::Focused)[0];
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    // Uncertain pixels may force tiles active beyond the mask's.
+    renderer.set_aa_uncertain_pixels(false).unwrap();
     renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
     let (mask, _) = renderer.read_silhouette_mask(0).unwrap();
     let stats = renderer.read_aa_stats(0).unwrap();
@@ -404,9 +407,69 @@ fn supersampled_sample_counts_and_errors() {
     assert!(renderer.read_supersampled(1).is_err());
 }
 
+/// The experiment's framing of a tetrahedron standing on the floor: 64x64
+/// pixels and a 64² focused map for light `light` of the quick preset, the
+/// ray-cast truth and coverage, and a renderer with the experiment's
+/// options.
+struct Tetrahedron {
+    cam: Camera,
+    matrix: LightMatrix,
+    truth: lixel::mesh::ShadowMasks,
+    coverage: Coverage,
+    renderer: Renderer,
+}
+
+impl Tetrahedron {
+    fn new(device: &wgpu::Device, queue: &wgpu::Queue, light: usize) -> Self {
+        use lixel::experiment::{camera_for, experiment_renderer_options, light_for, load_scene};
+        use lixel::experiment::{ExperimentConfig, Preset, SceneSource};
+        use lixel::{ShadowMapSize, ShadowProblem};
+        // One folder per call: the tests run in parallel.
+        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("lixel-render-aa-{}-{call}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("tetrahedron.obj");
+        std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+        let config = ExperimentConfig {
+            scene: SceneSource::File { path, options: Default::default() },
+            screen: 64,
+            map: 64,
+            ..ExperimentConfig::preset(Preset::Quick)
+        };
+        let scene = load_scene(&config.scene).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let cam = camera_for(&config, &scene).unwrap();
+        let light = light_for(&config, &scene, light);
+        let matrix = ShadowProblem::new(cam, light, scene.bounds(), ShadowMapSize::square(64))
+            .and_then(|p| p.solve(&Parameterization::Focused))
+            .unwrap();
+        let caster = RayCaster::new(&scene);
+        let truth = caster.trace_masks(&cam, &[light], 64, 64);
+        let coverage = Coverage::trace(&caster, &cam, &light, &truth);
+        let renderer = Renderer::new(device, queue, &scene, experiment_renderer_options()).unwrap();
+        Self { cam, matrix, truth, coverage, renderer }
+    }
+
+    /// Renders one antialiased frame: the masks, occlusion and validity words.
+    fn render(&mut self) -> (lixel::mesh::ShadowMasks, Vec<u32>, Vec<u32>) {
+        let lights = [self.matrix];
+        let frame = Frame { masks: true, lookup: AA32, ..Frame::new(&self.cam, &lights) };
+        self.renderer.render(&frame).unwrap();
+        let r = &self.renderer;
+        (r.read_masks().unwrap(), r.read_occlusion(0).unwrap(), r.read_validity(0).unwrap())
+    }
+
+    /// The mean visibility error of the words.
+    fn error(&self, occlusion: &[u32], valid: &[u32]) -> f64 {
+        VisibilityError::of_valid_occlusion(occlusion, valid, &self.truth, &self.coverage, AaSamples::X32)
+            .mean()
+            .unwrap()
+    }
+}
+
 /// The validity mask (Pan et al.'s Figure 7): a tetrahedron standing on the
-/// floor, 64x64 pixels and a 64² map (the experiment's framing of a scene
-/// file, its first light). Along the crease where the tetrahedron meets the
+/// floor (its first light). Along the crease where the tetrahedron meets the
 /// floor, a floor pixel's facet runs on under the tetrahedron, whose faces
 /// shadow those facet points although the camera sees the tetrahedron's lit
 /// face there. Without the mask the antialiased lookup's error exceeded the
@@ -415,50 +478,77 @@ fn supersampled_sample_counts_and_errors() {
 /// (measured 0.0012). The occlusion words are the same either way.
 #[test]
 fn validity_mask_keeps_crease_pixels_from_self_shadowing() {
-    use lixel::experiment::{camera_for, experiment_renderer_options, light_for, load_scene};
-    use lixel::experiment::{ExperimentConfig, Preset, SceneSource};
-    use lixel::{ShadowMapSize, ShadowProblem};
     let Some((device, queue)) = gpu() else { return };
-    let dir = std::env::temp_dir().join(format!("lixel-render-aa-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("tetrahedron.obj");
-    std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
-    let config = ExperimentConfig {
-        scene: SceneSource::File { path, options: Default::default() },
-        screen: 64,
-        map: 64,
-        ..ExperimentConfig::preset(Preset::Quick)
-    };
-    let scene = load_scene(&config.scene).unwrap();
-    let cam = camera_for(&config, &scene).unwrap();
-    let light = light_for(&config, &scene, 0);
-    let m = ShadowProblem::new(cam, light, scene.bounds(), ShadowMapSize::square(64))
-        .and_then(|p| p.solve(&Parameterization::Focused))
-        .unwrap();
-    let caster = RayCaster::new(&scene);
-    let truth = caster.trace_masks(&cam, &[light], 64, 64);
-    let coverage = Coverage::trace(&caster, &cam, &light, &truth);
-    let mut renderer = Renderer::new(&device, &queue, &scene, experiment_renderer_options()).unwrap();
-    let lights = [m];
-    let frame = Frame { masks: true, lookup: AA32, ..Frame::new(&cam, &lights) };
-    renderer.set_aa_validity(false).unwrap();
-    renderer.render(&frame).unwrap();
-    let unmasked = renderer.read_occlusion(0).unwrap();
-    assert!(renderer.read_validity(0).unwrap().iter().all(|&v| v == u32::MAX), "validity off: every sample valid");
-    renderer.set_aa_validity(true).unwrap();
-    renderer.render(&frame).unwrap();
-    let masks = renderer.read_masks().unwrap();
-    let occlusion = renderer.read_occlusion(0).unwrap();
-    let valid = renderer.read_validity(0).unwrap();
+    let mut tet = Tetrahedron::new(&device, &queue, 0);
+    tet.renderer.set_aa_validity(false).unwrap();
+    let (_, unmasked, all_valid) = tet.render();
+    assert!(all_valid.iter().all(|&v| v == u32::MAX), "validity off: every sample valid");
+    tet.renderer.set_aa_validity(true).unwrap();
+    let (masks, occlusion, valid) = tet.render();
     assert_eq!(occlusion, unmasked, "the mask changes no occlusion word");
     let hidden: u32 = valid.iter().map(|v| (!v).count_ones()).sum();
-    let e_std = VisibilityError::of_masks(&masks, &truth, &coverage, AaSamples::X32).mean().unwrap();
-    let e_all = VisibilityError::of_occlusion(&occlusion, &truth, &coverage, AaSamples::X32).mean().unwrap();
-    let e_aa =
-        VisibilityError::of_valid_occlusion(&occlusion, &valid, &truth, &coverage, AaSamples::X32).mean().unwrap();
+    let e_std = VisibilityError::of_masks(&masks, &tet.truth, &tet.coverage, AaSamples::X32).mean().unwrap();
+    let e_all = tet.error(&occlusion, &all_valid);
+    let e_aa = tet.error(&occlusion, &valid);
     eprintln!("standard {e_std:.4}, aa32 without the mask {e_all:.4}, with it {e_aa:.4}; {hidden} hidden samples");
     assert!(hidden > 50, "{hidden} hidden samples");
     assert!(e_aa < 0.5 * e_std, "aa32 {e_aa} against standard {e_std}");
     assert!(e_aa < 0.5 * e_all, "aa32 {e_aa} against {e_all} without the mask");
-    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The hidden test's screen-box gate skips only triangles that cannot hide
+/// a sample: the occlusion and validity words are the same with it and
+/// without it, on the tetrahedron's crease (where hundreds of samples are
+/// hidden) and on the tiny scene for both test lights.
+#[test]
+fn hidden_gate_keeps_the_words() {
+    let Some((device, queue)) = gpu() else { return };
+    let mut tet = Tetrahedron::new(&device, &queue, 0);
+    tet.renderer.set_aa_hidden_gate(false).unwrap();
+    let (_, occlusion, valid) = tet.render();
+    tet.renderer.set_aa_hidden_gate(true).unwrap();
+    let (_, gated_occlusion, gated_valid) = tet.render();
+    let hidden: u32 = valid.iter().map(|v| (!v).count_ones()).sum();
+    assert!(hidden > 50, "{hidden} hidden samples");
+    assert_eq!(gated_occlusion, occlusion);
+    assert_eq!(gated_valid, valid);
+    let scene = tiny_scene();
+    let cam = camera(96);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    for light in test_lights() {
+        let m = matrices(&scene, &cam, &[light], 256, &Parameterization::Focused)[0];
+        let frame = Frame { lookup: AA32, ..Frame::new(&cam, std::slice::from_ref(&m)) };
+        let mut words = Vec::new();
+        for gate in [false, true] {
+            renderer.set_aa_hidden_gate(gate).unwrap();
+            renderer.render(&frame).unwrap();
+            words.push((renderer.read_occlusion(0).unwrap(), renderer.read_validity(0).unwrap()));
+        }
+        let hidden: u32 = words[0].1.iter().map(|v| (!v).count_ones()).sum();
+        assert!(hidden > 0, "{light:?}: no hidden sample");
+        assert!(words[0] == words[1], "{light:?}: the gate changed a word");
+    }
+}
+
+/// Pixels whose depth compare is uncertain take the exact path: on the
+/// tetrahedron's third light, faces that the smooth normals turn towards
+/// the light while they look away from it are shadowed in the truth, and
+/// the bias lights them, with no silhouette texel in their footprints.
+/// Measured: mean error 0.0053 with only silhouette pixels exact, 0.0031
+/// with the uncertain ones too (76 pixels).
+#[test]
+fn uncertain_pixels_take_the_exact_path() {
+    let Some((device, queue)) = gpu() else { return };
+    let mut tet = Tetrahedron::new(&device, &queue, 2);
+    tet.renderer.set_aa_uncertain_pixels(false).unwrap();
+    let (_, occlusion, valid) = tet.render();
+    let e_off = tet.error(&occlusion, &valid);
+    assert_eq!(tet.renderer.read_aa_stats(0).unwrap().uncertain_pixels, 0);
+    tet.renderer.set_aa_uncertain_pixels(true).unwrap();
+    let (_, occlusion, valid) = tet.render();
+    let e_on = tet.error(&occlusion, &valid);
+    let stats = tet.renderer.read_aa_stats(0).unwrap();
+    eprintln!("only silhouette pixels exact {e_off:.4}, uncertain ones too {e_on:.4}; {stats:?}");
+    assert!(stats.uncertain_pixels > 0, "{stats:?}");
+    assert!(e_on < 0.75 * e_off, "{e_on} against {e_off}");
 }

@@ -4,14 +4,20 @@
 //! leave objects out. Likewise keeping a layer's map for a later frame
 //! (`RendererOptions::reuse_maps`), and drawing several lights in one frame
 //! (each light's bits are those of its own frame; the experiment's shared
-//! frame relies on it).
+//! frame relies on it). And work an experiment does not repeat: masks read
+//! from the frame that already wrote them, and a loop's first frame shared
+//! by a second loop at the same view.
 
 #![cfg(feature = "render")]
 
 mod render_common;
 
 use glam::{DVec3, UVec2};
-use lixel::render::{AnalysisRequest, Frame, Renderer, RendererOptions, ShadowLookup, SpsmOptions};
+use lixel::optimize::{OptimizeOptions, SearchStrategy};
+use lixel::render::{
+    AnalysisRequest, FirstFrame, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowLookup,
+    ShadowLoop, SpsmOptions,
+};
 use lixel::{Camera, Light, Parameterization, ShadowMapSize, ShadowProblem};
 use render_common::*;
 
@@ -182,6 +188,83 @@ fn each_light_of_a_frame_gets_the_bits_of_its_own_frame() {
             assert_eq!(differing, 0, "{n} lights: light {bit}'s bits differ from its own frame's");
         }
     }
+}
+
+#[test]
+fn masks_come_from_the_last_frame_only_when_it_wrote_them() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(64);
+    let focused = matrices(&scene, &camera, &test_lights(), 128, &Parameterization::Focused);
+    let (a, b) = (focused[0], focused[1]);
+    let options = RendererOptions { analysis_size: (32, 32), timestamps: false, ..Default::default() };
+    let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let mut fresh = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let masks_of = |m, lookup| masks_frame(&camera, m, lookup);
+    let spsm = ShadowLookup::Spsm(SpsmOptions::default());
+    assert!(!renderer.has_masks_of(&masks_of(&a, ShadowLookup::DepthCompare)), "nothing rendered yet");
+    // A loop's frame: no masks asked for, but its analysis pass reads them.
+    let analysis =
+        Frame { masks: false, analysis: Some(AnalysisRequest::default()), ..masks_of(&a, Default::default()) };
+    renderer.render(&analysis).unwrap();
+    assert!(renderer.has_masks_of(&masks_of(&a, ShadowLookup::DepthCompare)));
+    assert!(!renderer.has_masks_of(&masks_of(&b, ShadowLookup::DepthCompare)), "another matrix");
+    assert!(!renderer.has_masks_of(&masks_of(&a, spsm)), "another lookup");
+    let two = Frame { lights: &focused, ..masks_of(&a, ShadowLookup::DepthCompare) };
+    assert!(!renderer.has_masks_of(&two), "other lights");
+    fresh.render(&masks_of(&a, ShadowLookup::DepthCompare)).unwrap();
+    assert_eq!(renderer.read_masks().unwrap(), fresh.read_masks().unwrap(), "the analysis frame's masks");
+    // A frame without masks or analysis writes none.
+    renderer.render(&Frame::new(&camera, std::slice::from_ref(&a))).unwrap();
+    assert!(!renderer.has_masks_of(&masks_of(&a, ShadowLookup::DepthCompare)));
+    renderer.render(&masks_of(&a, ShadowLookup::DepthCompare)).unwrap();
+    assert!(renderer.has_masks_of(&masks_of(&a, ShadowLookup::DepthCompare)));
+    // A new capture of the view forgets them.
+    renderer.capture_view(&camera).unwrap();
+    assert!(!renderer.has_masks_of(&masks_of(&a, ShadowLookup::DepthCompare)));
+}
+
+#[test]
+fn a_second_loop_at_the_view_takes_the_first_frame_of_the_first() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(96);
+    let lights = [Light::point(DVec3::new(-8.0, 30.0, 12.0))];
+    let view = LoopView { camera: &camera, lights: &lights, bounds: scene.bounds(), map: ShadowMapSize::square(128) };
+    let options = RendererOptions { analysis_size: (48, 48), timestamps: false, ..Default::default() };
+    let mut shared = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let mut alone = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let loop_of = |strategy| {
+        let optimize = OptimizeOptions { strategy, ..Default::default() };
+        ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() }).unwrap()
+    };
+    let strategies = [SearchStrategy::Paper, SearchStrategy::NelderMead { max_iterations: 60 }];
+    let mut first = FirstFrame::default();
+    // The frame index the next frame would get: frames rendered so far.
+    let rendered = |r: &mut Renderer| r.render(&Frame::new(&camera, &[])).unwrap().frame;
+    let mut frames = Vec::new();
+    for (k, strategy) in strategies.into_iter().enumerate() {
+        let (before_shared, before_alone) = (rendered(&mut shared), rendered(&mut alone));
+        let (mut a, mut b) = (loop_of(strategy), loop_of(strategy));
+        let kept = a.settle_from(&mut shared, &view, 5, &mut first).unwrap();
+        let own = b.settle(&mut alone, &view, 5).unwrap();
+        assert_eq!(kept, own, "loop {k}");
+        assert_eq!(a.frames(), b.frames(), "loop {k}: the shared frame counts");
+        let drawn = (rendered(&mut shared) - before_shared - 1, rendered(&mut alone) - before_alone - 1);
+        frames.push(drawn);
+    }
+    assert_eq!(frames[0].0, frames[0].1, "the first loop renders every frame");
+    assert_eq!(frames[1].0 + 1, frames[1].1, "the second loop takes the first frame");
+    // Another map size is another view: nothing taken.
+    let other = LoopView { map: ShadowMapSize::square(96), ..view };
+    let before = rendered(&mut shared);
+    let settled = loop_of(SearchStrategy::Paper).settle_from(&mut shared, &other, 5, &mut first).unwrap();
+    assert_eq!(rendered(&mut shared) - before - 1, settled.frames as u64);
+}
+
+/// A frame of `matrix` alone that writes its masks.
+fn masks_frame<'a>(camera: &'a Camera, matrix: &'a lixel::LightMatrix, lookup: ShadowLookup) -> Frame<'a> {
+    Frame { camera, lights: std::slice::from_ref(matrix), masks: true, analysis: None, lookup }
 }
 
 /// A matrix per test light (directional and point) and per lookup-free method.

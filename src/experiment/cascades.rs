@@ -149,6 +149,7 @@ impl Runner<'_> {
             s.exact_pixels += t.exact_pixels;
             s.overflow_pixels += t.overflow_pixels;
             s.wide_pixels += t.wide_pixels;
+            s.uncertain_pixels += t.uncertain_pixels;
             s.triangle_tests = s.triangle_tests.saturating_add(t.triangle_tests);
         }
         Ok(s)

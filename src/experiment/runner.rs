@@ -13,8 +13,8 @@ use crate::mesh::{PrimaryView, RayCaster, Scene, ShadowMasks};
 use crate::optimize::{OptimizeOptions, SearchStrategy};
 use crate::render::subpixel::AaSamples;
 use crate::render::{
-    Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowBias, ShadowFaces, ShadowLookup,
-    ShadowLoop,
+    FirstFrame, Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, ShadowBias, ShadowFaces,
+    ShadowLookup, ShadowLoop,
 };
 use crate::{Camera, Light, LightMatrix, LixelError, Parameterization, ShadowMapSize, ShadowProblem};
 
@@ -103,6 +103,9 @@ pub struct Runner<'a> {
     pub(super) camera: Camera,
     pub(super) renderer: Renderer,
     pub(super) stages: RunStages,
+    /// The last optimized loop's first frame: the next loop at the same
+    /// configuration (another search) starts from it instead of rendering it.
+    first_frame: FirstFrame,
 }
 
 impl std::fmt::Debug for Runner<'_> {
@@ -173,7 +176,7 @@ impl<'a> Runner<'a> {
         // Every configuration and method sees the scene through this one
         // camera: draw it once, shade the capture per method (same masks).
         renderer.capture_view(&camera)?;
-        Ok(Self { config, shared, camera, renderer, stages: RunStages::default() })
+        Ok(Self { config, shared, camera, renderer, stages: RunStages::default(), first_frame: FirstFrame::default() })
     }
 
     /// The camera.
@@ -223,10 +226,21 @@ impl<'a> Runner<'a> {
     /// [`masks`](Self::masks) with another lookup (a method's:
     /// [`MethodSpec::lookup`]).
     ///
+    /// The masks come from the last frame when it wrote them for the same
+    /// matrix and lookup (an optimized loop's last frame,
+    /// [`Renderer::has_masks_of`]), else from a frame of their own.
+    ///
     /// # Errors
     /// Renderer failures.
     pub fn masks_with(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<ShadowMasks, ExperimentError> {
-        self.render_view(matrix, lookup)?;
+        // One map per light: no cascades left over from a cascade method.
+        self.renderer.set_cascades(0, None);
+        let lights = std::slice::from_ref(matrix);
+        let frame = Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup };
+        if !self.renderer.has_masks_of(&frame) {
+            let report = self.renderer.render(&frame)?;
+            self.renderer.wait_for(&report.submission)?;
+        }
         Ok(self.renderer.read_masks()?)
     }
 
@@ -308,7 +322,8 @@ impl<'a> Runner<'a> {
             bounds: *problem.bounds(),
             map: problem.map_size(),
         };
-        let settled = shadows.settle(&mut self.renderer, &view, self.config.max_optimize_frames)?;
+        let settled =
+            shadows.settle_from(&mut self.renderer, &view, self.config.max_optimize_frames, &mut self.first_frame)?;
         let note = settled.fallbacks[0].map(rows::fallback_note).unwrap_or_default();
         Ok((settled.matrices[0], settled.frames, note))
     }
@@ -463,8 +478,8 @@ impl<'a> Runner<'a> {
             ShadowLookup::SubPixelAa(_) => {
                 let s = self.aa_stats(matrices.len())?;
                 let aa = format!(
-                    "aa pairs {} exact {} overflow {} wide {}",
-                    s.pairs, s.exact_pixels, s.overflow_pixels, s.wide_pixels
+                    "aa pairs {} exact {} (uncertain {}) overflow {} wide {}",
+                    s.pairs, s.exact_pixels, s.uncertain_pixels, s.overflow_pixels, s.wide_pixels
                 );
                 if note.is_empty() {
                     aa

@@ -168,18 +168,33 @@ impl Bvh {
 
     /// Depth-first traversal, nearer child first. `limit` gives the current
     /// search distance; `visit` tests one triangle and returns `true` to stop.
+    /// A node is tested against the limit when its parent is opened and
+    /// tested again when popped only if the limit shrank since (the same
+    /// test would give the same answer): an occlusion ray's limit never
+    /// shrinks, so each node costs one box test, not two.
     fn traverse(&self, ray: &Ray, mut limit: impl FnMut(f32) -> f32, mut visit: impl FnMut(usize, &Triangle) -> bool) {
+        let Some(root) = self.nodes.first() else { return };
         if self.triangles.is_empty() {
             return;
         }
         // Division by a zero component gives ±inf, which the slab test handles.
         let inv = ray.direction.recip();
-        let mut stack = [0u32; 64];
+        let mut t_max = limit(f32::INFINITY);
+        if slab(ray.origin, inv, root.min, root.max, t_max).is_none() {
+            return;
+        }
+        // Each entry: a node and the limit it passed its box test with. The
+        // build splits every range at its median, so the tree is at most
+        // ⌈log2 n⌉ + 1 ≤ 33 levels deep (`u32` indices), and a depth-first
+        // walk holds at most one entry per level plus one: 64 never fills.
+        let mut stack = [(0u32, t_max); 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let node = &self.nodes[stack[top] as usize];
-            if slab(ray.origin, inv, node.min, node.max, limit(f32::INFINITY)).is_none() {
+            let (index, tested) = stack[top];
+            let node = &self.nodes[index as usize];
+            t_max = limit(f32::INFINITY);
+            if t_max < tested && slab(ray.origin, inv, node.min, node.max, t_max).is_none() {
                 continue;
             }
             if node.count > 0 {
@@ -192,13 +207,13 @@ impl Bvh {
                 continue;
             }
             let (l, r) = (node.first as usize, node.first as usize + 1);
-            let t_max = limit(f32::INFINITY);
             let dl = slab(ray.origin, inv, self.nodes[l].min, self.nodes[l].max, t_max);
             let dr = slab(ray.origin, inv, self.nodes[r].min, self.nodes[r].max, t_max);
             // Push the farther child first so the nearer one is visited next.
             let mut push = |i: usize| {
+                debug_assert!(top < stack.len(), "BVH deeper than its median build allows");
                 if top < stack.len() {
-                    stack[top] = i as u32;
+                    stack[top] = (i as u32, t_max);
                     top += 1;
                 }
             };

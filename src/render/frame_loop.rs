@@ -148,6 +148,54 @@ pub struct Settled {
     pub fallbacks: Vec<Option<Fallback>>,
 }
 
+/// The first frame of a [`ShadowLoop::settle_from`] kept for the next
+/// loop at the same view (say, another search strategy): the analysis
+/// readback of the focused matrices and what it was rendered for. Start
+/// with `FirstFrame::default()`.
+#[derive(Clone, Debug, Default)]
+pub struct FirstFrame {
+    kept: Option<KeptFirst>,
+}
+
+/// What [`FirstFrame`] holds.
+#[derive(Clone, Debug)]
+struct KeptFirst {
+    lights: Vec<Light>,
+    bounds: SceneBounds,
+    map: ShadowMapSize,
+    lookup: ShadowLookup,
+    readback: AnalysisReadback,
+}
+
+impl FirstFrame {
+    /// The kept readback when it was rendered for this view and lookup with
+    /// exactly `matrices`.
+    fn matching(
+        &self,
+        view: &LoopView<'_>,
+        lookup: ShadowLookup,
+        matrices: &[LightMatrix],
+    ) -> Option<&AnalysisReadback> {
+        self.kept
+            .as_ref()
+            .filter(|k| {
+                k.lookup == lookup
+                    && k.map == view.map
+                    && k.bounds == view.bounds
+                    && k.lights == view.lights
+                    && k.readback.camera == *view.camera
+                    && k.readback.lights == matrices
+            })
+            .map(|k| &k.readback)
+    }
+
+    /// Keeps `readback` as the first frame at `view` in `lookup`.
+    fn keep(&mut self, view: &LoopView<'_>, lookup: ShadowLookup, readback: AnalysisReadback) {
+        self.kept =
+            Some(KeptFirst { lights: view.lights.to_vec(), bounds: view.bounds, map: view.map, lookup, readback });
+    }
+}
+
 /// Why a frame failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -449,6 +497,28 @@ impl ShadowLoop {
             let policy = policy.clone();
             return self.settle_cascades(&policy, renderer, view, max_frames);
         }
+        self.settle_from(renderer, view, max_frames, &mut FirstFrame::default())
+    }
+
+    /// [`settle`](Self::settle) whose first frame may come from `first`:
+    /// every settle starts with the same frame at a view — the focused
+    /// matrices with an analysis pass in the loop's lookup — whatever its
+    /// search, so a loop at the view, lights, bounds, map size and lookup of
+    /// the frame `first` holds takes that frame's readback instead of
+    /// rendering it again (and counts it as its first frame); otherwise it
+    /// renders its first frame and leaves it in `first`. The readback is a
+    /// function of the frame and the renderer's options, so `first` must
+    /// only be shared between loops on one renderer.
+    ///
+    /// # Errors
+    /// As [`settle`](Self::settle).
+    pub fn settle_from(
+        &mut self,
+        renderer: &mut Renderer,
+        view: &LoopView<'_>,
+        max_frames: usize,
+        first: &mut FirstFrame,
+    ) -> Result<Settled, LoopError> {
         for (i, m) in view.solve(view.map, &Parameterization::Focused)?.into_iter().enumerate() {
             self.scheduler.set_matrix(i, m);
         }
@@ -458,14 +528,19 @@ impl ShadowLoop {
         let max_frames = max_frames.max(1);
         for frame in 1..=max_frames {
             let matrices = current(&self.scheduler);
-            let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
-            let report = self.render(renderer, view, &matrices, analysis)?;
-            renderer.wait_for(&report.submission)?;
-            let readback = loop {
-                if let Some(r) = renderer.try_take_analysis() {
-                    break r;
+            let kept = first.matching(view, self.lookup, &matrices).filter(|_| frame == 1);
+            let readback = match kept {
+                Some(kept) => {
+                    self.frame += 1;
+                    kept.clone()
                 }
-                renderer.wait_idle()?;
+                None => {
+                    let readback = self.analysis_frame(renderer, view, &matrices, frame)?;
+                    if frame == 1 {
+                        first.keep(view, self.lookup, readback.clone());
+                    }
+                    readback
+                }
             };
             let mut fallbacks = Vec::with_capacity(view.lights.len());
             let mut moved = false;
@@ -480,6 +555,26 @@ impl ShadowLoop {
         }
         let fallbacks = vec![None; view.lights.len()];
         Ok(Settled { matrices: current(&self.scheduler), frames: max_frames, fallbacks })
+    }
+
+    /// Renders `matrices` with an analysis pass tagged `frame` and waits
+    /// for its readback.
+    fn analysis_frame(
+        &mut self,
+        renderer: &mut Renderer,
+        view: &LoopView<'_>,
+        matrices: &[LightMatrix],
+        frame: usize,
+    ) -> Result<AnalysisReadback, LoopError> {
+        let analysis = Some(AnalysisRequest { lights: None, tag: frame as u32 });
+        let report = self.render(renderer, view, matrices, analysis)?;
+        renderer.wait_for(&report.submission)?;
+        loop {
+            if let Some(r) = renderer.try_take_analysis() {
+                return Ok(r);
+            }
+            renderer.wait_idle()?;
+        }
     }
 
     /// [`settle`](Self::settle) for [`LoopPolicy::Cascaded`].

@@ -65,7 +65,9 @@ use crate::{Camera, LightMatrix};
 pub use analysis::{AnalysisMeta, AnalysisReadback};
 pub use cascade_loop::{sun_bits, CascadeMatrices, CascadePolicy, SplitPlacement};
 pub use device::Gpu;
-pub use frame_loop::{LoopError, LoopFrame, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Settled, ShadowLoop};
+pub use frame_loop::{
+    FirstFrame, LoopError, LoopFrame, LoopOptions, LoopPolicy, LoopView, ReadbackInfo, Settled, ShadowLoop,
+};
 pub use lookup::ShadowLookup;
 pub use options::{AnalysisSource, RendererOptions, ShadowBias, ShadowFaces};
 pub use output::{masks_image, shadow_map_image, DepthImage};
@@ -82,6 +84,16 @@ use timing::GpuTimer;
 use uniforms::{CameraRaw, LightRaw, LightsRaw, ShadowPassRaw, VertexRaw};
 
 /// The next `f32` above a finite `x`.
+/// What a frame's full-resolution masks were rendered for
+/// ([`Renderer::has_masks_of`]).
+#[derive(Clone, Debug, PartialEq)]
+struct MasksKey {
+    camera: Camera,
+    lights: Vec<LightMatrix>,
+    lookup: ShadowLookup,
+    cascades: Vec<Option<CascadeSlot>>,
+}
+
 /// Light slot of a cascade ([`Renderer::set_cascades`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct CascadeSlot {
@@ -303,6 +315,9 @@ pub struct Renderer {
     last_lights: Vec<LightMatrix>,
     /// The lookup mode of the last frame (index into `lookups`).
     last_lookup: Option<usize>,
+    /// What the last frame's full-resolution masks were rendered for, when
+    /// it wrote them ([`Renderer::has_masks_of`]).
+    last_masks: Option<MasksKey>,
     /// Light `i` is a cascade when `cascades[i]` is set
     /// ([`Renderer::set_cascades`]).
     cascades: Vec<Option<CascadeSlot>>,
@@ -474,6 +489,7 @@ impl Renderer {
             frame: 0,
             last_lights: Vec::new(),
             last_lookup: None,
+            last_masks: None,
             cascades: Vec::new(),
             aa: None,
             aa_bias,
@@ -590,6 +606,28 @@ impl Renderer {
         self.camera_targets.as_ref().map(|t| (&t.color.texture, &t.depth.view))
     }
 
+    /// Whether the last frame wrote the full-resolution masks that `frame`
+    /// would write — the same camera, lights, lookup and cascades, the masks
+    /// written (a frame with [`Frame::masks`], or one whose analysis pass
+    /// reads them) — so that [`read_masks`](Self::read_masks) gives
+    /// `frame`'s masks without rendering it. `false` after a failed frame
+    /// and after the captured view changed.
+    #[must_use]
+    pub fn has_masks_of(&self, frame: &Frame<'_>) -> bool {
+        self.last_masks.as_ref().is_some_and(|k| *k == self.masks_key(frame))
+    }
+
+    /// What the camera pass's masks of `frame` depend on besides the
+    /// renderer's fixed scene and options.
+    fn masks_key(&self, frame: &Frame<'_>) -> MasksKey {
+        MasksKey {
+            camera: *frame.camera,
+            lights: frame.lights.to_vec(),
+            lookup: frame.lookup,
+            cascades: self.cascades.clone(),
+        }
+    }
+
     /// Draws the scene from `camera` once into a view capture and waits for
     /// it. Until [`release_view`](Self::release_view) or the next capture,
     /// frames whose camera equals `camera` (bit for bit) do not draw the
@@ -610,6 +648,7 @@ impl Renderer {
     pub fn capture_view(&mut self, camera: &Camera) -> Result<(), RenderError> {
         self.errors.take(&self.device, "an earlier device call")?;
         self.capture = None;
+        self.last_masks = None;
         let frame = Frame::new(camera, &[]);
         let slots = self.prepare(&frame)?;
         self.write_uniforms(&frame, &slots);
@@ -639,6 +678,7 @@ impl Renderer {
     /// Drops the view capture: every frame draws its camera pass again.
     pub fn release_view(&mut self) {
         self.capture = None;
+        self.last_masks = None;
     }
 
     /// The camera of the current view capture, if any.
@@ -655,6 +695,7 @@ impl Renderer {
     /// for bad input; nothing is rendered then.
     pub fn render(&mut self, frame: &Frame<'_>) -> Result<FrameReport, RenderError> {
         let started = Instant::now();
+        self.last_masks = None;
         self.errors.take(&self.device, "an earlier device call")?;
         let slots = self.prepare(frame)?;
         let shadow_raw = self.write_uniforms(frame, &slots);
@@ -700,7 +741,8 @@ impl Renderer {
                 &mut encoder,
                 (&self.camera_uniforms, &self.camera_bindings.lights),
                 (&self.scene.vertices, &self.scene.indices, self.scene.index_count / 3),
-                &targets.masks.view,
+                (&targets.masks.view, &state.maps.depth_array),
+                &self.options.bias,
                 (targets.width, targets.height),
                 frame.lights,
                 samples,
@@ -736,6 +778,9 @@ impl Renderer {
         }
         self.last_lights = frame.lights.to_vec();
         self.last_lookup = Some(slots.lookup);
+        if camera_output == CameraOutput::ColorAndMasks {
+            self.last_masks = Some(self.masks_key(frame));
+        }
         let report = FrameReport {
             frame: self.frame,
             submission,

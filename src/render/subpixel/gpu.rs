@@ -65,6 +65,11 @@ pub struct AaStats {
     /// occluded, so this count depends on the lists' (atomic) order and may
     /// differ from run to run; the words do not.
     pub triangle_tests: u32,
+    /// Of [`exact_pixels`](Self::exact_pixels), those without a silhouette
+    /// texel in the footprint that took the exact path because their depth
+    /// compare is uncertain (a grazing surface, or the map's depth within
+    /// the bias band of the receiver's).
+    pub uncertain_pixels: u32,
 }
 
 #[repr(C)]
@@ -89,7 +94,13 @@ struct ParamsRaw {
     cull: u32,
     valid_base: u32,
     validity: u32,
-    _pad: [u32; 1],
+    uncertain: u32,
+    depth_bias: f32,
+    slope_scale: f32,
+    bias_clamp: f32,
+    screen_base: u32,
+    gate: u32,
+    _pad: [u32; 3],
 }
 
 /// One mesh edge for the silhouette pass (`Edge` in the shader).
@@ -153,7 +164,7 @@ pub(crate) struct AaPass {
     group0: wgpu::BindGroupLayout,
     group1: wgpu::BindGroupLayout,
     /// silhouette, sat_rows, sat_cols, tile_count_pass, tile_scan, tile_write, visibility,
-    /// visibility_exact.
+    /// visibility_exact, classify.
     pipelines: Vec<wgpu::ComputePipeline>,
     edges: wgpu::Buffer,
     edge_count: u32,
@@ -169,9 +180,15 @@ pub(crate) struct AaPass {
     cull: bool,
     /// The validity mask (on unless a test turns it off to compare).
     validity: bool,
+    /// The exact path for pixels whose depth compare is uncertain (on
+    /// unless a test turns it off to compare).
+    uncertain: bool,
+    /// The screen-box gate of the hidden test (on unless a test turns it
+    /// off to compare).
+    gate: bool,
 }
 
-const ENTRY_POINTS: [&str; 8] = [
+const ENTRY_POINTS: [&str; 9] = [
     "silhouette",
     "sat_rows",
     "sat_cols",
@@ -180,6 +197,7 @@ const ENTRY_POINTS: [&str; 8] = [
     "tile_write",
     "visibility",
     "visibility_exact",
+    "classify",
 ];
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -226,6 +244,16 @@ impl AaPass {
                     ty: wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Uint,
                         view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 10,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
                         multisampled: false,
                     },
                     count: None,
@@ -294,6 +322,8 @@ impl AaPass {
             capacity: PAIR_CAPACITY,
             cull: true,
             validity: true,
+            uncertain: true,
+            gate: true,
         }
     }
 
@@ -336,12 +366,14 @@ impl AaPass {
             lights,
             triangles,
             map_words: buffer("lixel aa mask and summed-area table", 2 * map_texels, true),
-            tile_words: buffer("lixel aa statistics and tiles", STATS_WORDS + 3 * tiles, true),
-            // The lists, each triangle's box in the map (4 f32), then the
-            // queue of the exact path's pixels.
+            // The statistics, then per tile its count, cursor, offset and
+            // whether an uncertain pixel forced it active.
+            tile_words: buffer("lixel aa statistics and tiles", STATS_WORDS + 4 * tiles, true),
+            // The lists, each triangle's box in the map (4 f32), its box on
+            // the screen (4 f32), then the queue of the exact path's pixels.
             tile_list: buffer(
                 "lixel aa triangle-tile lists, boxes and pixel queue",
-                u64::from(PAIR_CAPACITY) + 4 * triangles + pixels,
+                u64::from(PAIR_CAPACITY) + 8 * triangles + pixels,
                 false,
             ),
             // Every light's occlusion words, then every light's validity words.
@@ -359,7 +391,8 @@ impl AaPass {
         encoder: &mut wgpu::CommandEncoder,
         uniforms: (&wgpu::Buffer, &wgpu::Buffer),
         scene: (&wgpu::Buffer, &wgpu::Buffer, u32),
-        masks: &wgpu::TextureView,
+        (masks, maps): (&wgpu::TextureView, &wgpu::TextureView),
+        bias: &crate::render::ShadowBias,
         (width, height): (u32, u32),
         lights: &[LightMatrix],
         samples: AaSamples,
@@ -409,6 +442,7 @@ impl AaPass {
                 Self::buffer(7, &self.table),
                 Self::buffer(8, &sized.occlusion),
                 wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(masks) },
+                wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::TextureView(maps) },
             ],
         });
         encoder.clear_buffer(&sized.tile_words, 0, Some(4 * STATS_WORDS));
@@ -431,16 +465,25 @@ impl AaPass {
                 sat_base: sized.map_texels as u32,
                 tile_stride: sized.tiles as u32,
                 box_base: PAIR_CAPACITY,
-                queue_base: PAIR_CAPACITY + 4 * sized.triangles as u32,
+                screen_base: PAIR_CAPACITY + 4 * sized.triangles as u32,
+                queue_base: PAIR_CAPACITY + 8 * sized.triangles as u32,
                 cull: u32::from(self.cull),
                 valid_base: (pixels * lights.len() as u64) as u32,
                 validity: u32::from(self.validity),
-                _pad: [0; 1],
+                uncertain: u32::from(self.uncertain),
+                // As `ShadowPassRaw` passes it to the shadow pass.
+                depth_bias: bias.constant as f32 * 2f32.powi(-24),
+                slope_scale: bias.slope_scale,
+                bias_clamp: bias.clamp,
+                gate: u32::from(self.gate),
+                _pad: [0; 3],
             };
             queue.write_buffer(&self.params, i as u64 * PARAM_STRIDE, bytemuck::bytes_of(&raw));
             encoder.clear_buffer(&sized.map_words, 0, Some(4 * u64::from(mw) * u64::from(mh)));
-            // Counts and cursors (the offsets are all written by the scan).
+            // Counts, cursors and forced flags (the offsets are all written
+            // by the scan).
             encoder.clear_buffer(&sized.tile_words, 4 * STATS_WORDS, Some(8 * sized.tiles));
+            encoder.clear_buffer(&sized.tile_words, 4 * (STATS_WORDS + 3 * sized.tiles), Some(4 * sized.tiles));
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(&format!("lixel aa passes, light {i}")),
                 timestamp_writes: None,
@@ -457,6 +500,7 @@ impl AaPass {
             flat(&mut pass, 0, self.edge_count);
             flat(&mut pass, 1, mh);
             flat(&mut pass, 2, mw);
+            flat(&mut pass, 8, width * height);
             flat(&mut pass, 3, triangles);
             pass.set_pipeline(&self.pipelines[4]);
             pass.dispatch_workgroups(1, 1, 1);
@@ -521,8 +565,15 @@ impl Renderer {
         if light >= last.lights {
             return Err(RenderError::NoSuchLight { light, count: last.lights });
         }
-        let w = self.read_buffer_words(&sized.tile_words, (light * STATS_PER_LIGHT) as u64, 5)?;
-        Ok(AaStats { pairs: w[0], exact_pixels: w[1], overflow_pixels: w[2], wide_pixels: w[3], triangle_tests: w[4] })
+        let w = self.read_buffer_words(&sized.tile_words, (light * STATS_PER_LIGHT) as u64, 7)?;
+        Ok(AaStats {
+            pairs: w[0],
+            exact_pixels: w[1],
+            overflow_pixels: w[2],
+            wide_pixels: w[3],
+            triangle_tests: w[4],
+            uncertain_pixels: w[6],
+        })
     }
 
     /// Light `light`'s silhouette mask and summed-area table of the last
@@ -622,6 +673,34 @@ impl Renderer {
         self.ensure_aa()?;
         if let Some(aa) = self.aa.as_mut() {
             aa.validity = on;
+        }
+        Ok(())
+    }
+
+    /// Turns the exact path for pixels whose depth compare is uncertain on
+    /// (the default) or off (only pixels with a silhouette texel in the
+    /// footprint take it), for comparisons.
+    ///
+    /// # Errors
+    /// As [`set_aa_footprint_culling`](Self::set_aa_footprint_culling).
+    pub fn set_aa_uncertain_pixels(&mut self, on: bool) -> Result<(), RenderError> {
+        self.ensure_aa()?;
+        if let Some(aa) = self.aa.as_mut() {
+            aa.uncertain = on;
+        }
+        Ok(())
+    }
+
+    /// Turns the screen-box gate of the validity mask's hidden test on (the
+    /// default) or off (every tested triangle runs the test), for
+    /// comparisons: the words are the same either way.
+    ///
+    /// # Errors
+    /// As [`set_aa_footprint_culling`](Self::set_aa_footprint_culling).
+    pub fn set_aa_hidden_gate(&mut self, on: bool) -> Result<(), RenderError> {
+        self.ensure_aa()?;
+        if let Some(aa) = self.aa.as_mut() {
+            aa.gate = on;
         }
         Ok(())
     }
