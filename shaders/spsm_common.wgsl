@@ -1,7 +1,7 @@
 // Sub-pixel shadow maps (Lecocq et al. 2014): the texel format and the
 // geometry shared by the SPSM pass (spsm_pass.wgsl) and the SPSM lookup
 // (spsm_lookup.wgsl). The renderer prepends constants SPSM_EXPONENT,
-// SPSM_BIAS and SPSM_TOLERANCE (see src/render/spsm/mod.rs).
+// SPSM_BIAS, SPSM_TOLERANCE, SPSM_INNER_EDGES and others (see src/render/spsm/mod.rs).
 //
 // Space. Everything happens in the map's texel space (x right, y down,
 // texel k covers [k, k + 1)) with the matrix's own post-projective depth
@@ -15,7 +15,14 @@
 //
 // Texel (Rgba32Uint):
 //   x, y, z: the closest triangle's vertices v0, v1, v2 relative to the texel
-//            centre, in texels, as two f16 each (pack2x16float);
+//            centre, in texels, as two f16 each (pack2x16float). With
+//            SPSM_INNER_EDGES (SpsmOptions::inner_edges), when every
+//            offset component lies within SPSM_FLAG_REACH, bit 0 of
+//            word k (the last bit of v_k's x) is 1 when edge v_k -> v_(k+1)
+//            is inner (session 7: the mesh continues across it on the
+//            light's side; spsm_pass.wgsl, spsm_inner_edges), that x
+//            rounded to the nearer f16 of that parity (error at most one
+//            f16 step, 2^-8 texel there); farther triangles keep plain f16s;
 //   w:       bits 31..16: zeta at the texel centre on the triangle's plane,
 //            16-bit unorm over [-1/16, 17/16];
 //            bits 15..0: the plane's gradient (dzeta/dx, dzeta/dy), never 0:
@@ -113,8 +120,27 @@ fn spsm_decode_gradient(bits: u32, map_size: vec2<f32>) -> vec4<f32> {
     return vec4<f32>(m * cos(angle), m * sin(angle), e, e);
 }
 
+// Offsets below this (every component, in texels) carry the inner-edge
+// flags in their f16 bits: the extra rounding stays below 2^-8 texel.
+const SPSM_FLAG_REACH: f32 = 4.0;
+
 fn spsm_pack_offset(v: vec2<f32>) -> u32 {
     return pack2x16float(clamp(v, vec2<f32>(-SPSM_MAX_OFFSET), vec2<f32>(SPSM_MAX_OFFSET)));
+}
+
+// Vertex offset `v` with `flag` in bit 0: when the rounded x has the other
+// parity, the neighbouring f16 on the side of the exact value (one f16 step
+// at most from it).
+fn spsm_pack_vertex(v: vec2<f32>, flag: u32) -> u32 {
+    let clamped = clamp(v, vec2<f32>(-SPSM_MAX_OFFSET), vec2<f32>(SPSM_MAX_OFFSET));
+    let bits = pack2x16float(clamped);
+    if (bits & 1u) == flag {
+        return bits;
+    }
+    let rounded = unpack2x16float(bits).x;
+    // f16 magnitudes grow with their bits; the bits of +-0 only upwards.
+    let up = abs(clamped.x) >= abs(rounded) || (bits & 0x7fffu) == 0u;
+    return select(bits - 1u, bits + 1u, up);
 }
 
 // Signed doubled area (texel space).
@@ -234,6 +260,8 @@ fn spsm_clipped_edge_min(a: vec2<f32>, b: vec2<f32>, lo: vec2<f32>, hi: vec2<f32
 struct SpsmTexel {
     // 0: a triangle; 1: depth only; 2: empty.
     kind: u32,
+    // Bit k: edge v_k -> v_(k+1) is inner (the mesh continues across it).
+    inner: u32,
     // Vertices in absolute texel coordinates.
     v0: vec2<f32>,
     v1: vec2<f32>,
@@ -268,6 +296,10 @@ fn spsm_decode_shape(words: vec4<u32>, texel: vec2<i32>) -> SpsmTexel {
     out.v0 = out.centre + unpack2x16float(words.x);
     out.v1 = out.centre + unpack2x16float(words.y);
     out.v2 = out.centre + unpack2x16float(words.z);
+    let reach = max(max(abs(out.v0 - out.centre), abs(out.v1 - out.centre)), abs(out.v2 - out.centre));
+    if SPSM_INNER_EDGES && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
+        out.inner = (words.x & 1u) | ((words.y & 1u) << 1u) | ((words.z & 1u) << 2u);
+    }
     return out;
 }
 

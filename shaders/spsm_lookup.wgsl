@@ -5,6 +5,9 @@
 // For a receiver p (texel position, depth zeta = z / w of the light matrix):
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
 //    touches the texel); p inside the stored triangle -> its plane decides;
+//    with SPSM_INNER_EDGES, p outside a small one only across inner edges
+//    (the caster continues there, session 7) and far enough behind its
+//    plane -> shadowed;
 // 2. the 3x3 neighbourhood: any stored triangle containing p whose plane is
 //    in front of p -> shadowed; else p on the own triangle's plane (within
 //    its change over a texel) -> lit (a curved receiver's neighbouring
@@ -318,6 +321,9 @@ const SGSM_PATH_PLANE_SHADOWED: u32 = 128u;
 // A depth-only texel (a triangle crossing the light's w = 0 plane): its
 // 16-bit z / w at the texel centre against p's, constant bias only.
 const SPSM_PATH_DEPTH_ONLY: u32 = 256u;
+// p lies outside the own triangle only across its inner edges and its
+// plane is in front of p (spsm_continues_to).
+const SPSM_PATH_CONTINUED: u32 = 512u;
 
 // A small stored triangle (twice its area below this, in texels²) is taken
 // for a facet of a finely tessellated curved surface (session 4).
@@ -355,6 +361,93 @@ fn spsm_beyond_facet(t: SpsmTexel, p: vec2<f32>) -> bool {
     return d > width;
 }
 
+// Whether the caster of triangle t continues to p (session 7): p lies
+// outside t, and only beyond edges that are inner for the light (the pass's
+// flags, spsm_inner_edges), so p's part of the texel holds the mesh's next
+// facet, unstored (a tessellated curved caster's thin outer facets lose
+// every texel to the facet nearer the light); t's plane stands in for it.
+fn spsm_continues_to(t: SpsmTexel, p: vec2<f32>) -> bool {
+    let area2 = spsm_cross(t.v1 - t.v0, t.v2 - t.v0);
+    let orient = sign(area2);
+    if !SPSM_INNER_EDGES || orient == 0.0 || abs(area2) >= SPSM_FACET_AREA {
+        return false;
+    }
+    var beyond = 0u;
+    if dot(p - t.v0, spsm_edge_normal(t.v0, t.v1, orient)) > 0.0 {
+        beyond |= 1u;
+    }
+    if dot(p - t.v1, spsm_edge_normal(t.v1, t.v2, orient)) > 0.0 {
+        beyond |= 2u;
+    }
+    if dot(p - t.v2, spsm_edge_normal(t.v2, t.v0, orient)) > 0.0 {
+        beyond |= 4u;
+    }
+    return beyond != 0u && (beyond & ~t.inner) == 0u;
+}
+
+// How far behind a caster, in multiples of the caster facet's own longest
+// edge (world units, along the light ray), a receiver must lie for
+// spsm_continues_to to shadow it: nearer, p may be the caster's own next
+// facet (its lit side curving away from the plane of the stored one).
+
+// The local inverse of the light's projection at `world`: the rows of the
+// inverse Jacobian of (texel x, texel y, zeta) with respect to world
+// position, so that a small (texel, zeta) offset v maps to the world offset
+// (dot(r[0], v), dot(r[1], v), dot(r[2], v)). Zero rows when singular.
+fn spsm_world_rows(light: Light, world: vec3<f32>) -> array<vec3<f32>, 3> {
+    let clip = light.clip_from_world * vec4<f32>(world, 1.0);
+    let ndc = clip.xyz / clip.w;
+    var c: array<vec3<f32>, 3>;
+    for (var i = 0u; i < 3u; i++) {
+        let d = light.clip_from_world[i];
+        let n = (d.xyz - ndc * d.w) / clip.w;
+        c[i] = vec3<f32>(0.5 * n.x * light.map_size.x, -0.5 * n.y * light.map_size.y, n.z);
+    }
+    let r = array<vec3<f32>, 3>(cross(c[1], c[2]), cross(c[2], c[0]), cross(c[0], c[1]));
+    let det = dot(c[0], r[0]);
+    if det == 0.0 {
+        return array<vec3<f32>, 3>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    return array<vec3<f32>, 3>(r[0] / det, r[1] / det, r[2] / det);
+}
+
+// The world offset of the (texel, zeta) offset `v` (spsm_world_rows).
+fn spsm_world_offset(r: array<vec3<f32>, 3>, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(r[0], v), dot(r[1], v), dot(r[2], v));
+}
+
+// How far from a small stored facet's plane, in multiples of p's distance
+// to the facet's farthest vertex (world units), a receiver must lie for
+// spsm_continues_to to shadow it (spsm_behind_facet). Session 7, first 20
+// default lights: 1 gave focused+spsm 2074 (16, with the own-plane
+// nearness test kept, 1267, but fixed neither configuration 5 nor
+// tests/render_spsm.rs's cylinder).
+const SPSM_CONTINUE_GAP: f32 = 1.0;
+
+// Whether the receiver at `world` (depth zeta at p) lies farther from the
+// plane of triangle t, measured along the plane's normal in world units (the
+// projection taken as affine around p), than SPSM_CONTINUE_GAP times its
+// distance along the plane to t's farthest vertex: a surface through p that
+// continues t's caster (curving away from t's plane at most at right angles)
+// stays nearer, so p is a receiver behind the caster, not its own next facet.
+fn spsm_behind_facet(light: Light, world: vec3<f32>, t: SpsmTexel, p: vec2<f32>, zeta: f32) -> bool {
+    let r = spsm_world_rows(light, world);
+    let v = array<vec2<f32>, 3>(t.v0, t.v1, t.v2);
+    let e1 = spsm_world_offset(r, vec3<f32>(v[1] - v[0], dot(t.gradient, v[1] - v[0])));
+    let e2 = spsm_world_offset(r, vec3<f32>(v[2] - v[0], dot(t.gradient, v[2] - v[0])));
+    let normal = cross(e1, e2);
+    if dot(normal, normal) == 0.0 {
+        return false;
+    }
+    let gap = abs(dot(spsm_world_offset(r, vec3<f32>(0.0, 0.0, zeta - spsm_plane_at(t, p).x)), normalize(normal)));
+    var reach = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let d = p - v[k];
+        reach = max(reach, length(spsm_world_offset(r, vec3<f32>(d, dot(t.gradient, d)))));
+    }
+    return gap > SPSM_CONTINUE_GAP * reach;
+}
+
 // Whether a stored surface through p other than the own texel's triangle
 // `own` (p outside it) may make p lit: `own` is not an occluder in front of
 // p (by more than its depth change over one texel), or, except with
@@ -364,7 +457,7 @@ fn spsm_other_surface_lit(own: SpsmTexel, p: vec2<f32>, zeta: f32) -> bool {
     let plane = spsm_plane_at(own, p);
     let slack = SPSM_BIAS + SPSM_TOLERANCE * plane.y;
     let near = plane.x >= zeta - slack - abs(own.gradient.x) - abs(own.gradient.y);
-    return near || (!SPSM_THIN && spsm_beyond_facet(own, p));
+    return near || (!SPSM_THIN && spsm_beyond_facet(own, p) && !spsm_continues_to(own, p));
 }
 
 fn in_shadow(light: Light, world: vec3<f32>) -> bool {
@@ -387,6 +480,10 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     if spsm_inside(own, p) {
         return spsm_decide(light, k, world, SPSM_PATH_OWN, own_plane.x < zeta - own_slack);
     }
+    let own_near = own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
+    if own_plane.x < zeta - own_slack && spsm_continues_to(own, p) && spsm_behind_facet(light, world, own, p, zeta) {
+        return spsm_decide(light, k, world, SPSM_PATH_CONTINUED, true);
+    }
     // The own texel's closest triangle, extended to p, is not in front of p
     // by more than its own depth change across one texel (a curved
     // receiver's neighbouring facet): no occluder found so far. p then
@@ -397,7 +494,6 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     // texel; also when p lies beyond a facet width of the own triangle,
     // spsm_other_surface_lit). A thin caster stored over a receiver is far
     // more in front and goes on to the silhouette recovery.
-    let own_near = own_plane.x >= zeta - own_slack - abs(own.gradient.x) - abs(own.gradient.y);
     let own_clear = spsm_other_surface_lit(own, p, zeta);
     let pattern_slack = SPSM_TOLERANCE * 0.5 * (own.gradient_error.x + own.gradient_error.y);
     var pattern = 0u;

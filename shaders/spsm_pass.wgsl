@@ -39,6 +39,10 @@ struct ShadowPass {
 // The scene's VertexRaw words (7 per vertex: position xyz, normal xyz, albedo).
 @group(0) @binding(1) var<storage, read> scene_vertices: array<u32>;
 @group(0) @binding(2) var<storage, read> scene_indices: array<u32>;
+// Per index slot, the slot of the vertex across the edge starting at that
+// corner in the one neighbouring triangle, or 0xffffffff
+// (src/render/spsm/adjacency.rs; session 7).
+@group(0) @binding(3) var<storage, read> scene_adjacent: array<u32>;
 // The centre-sampled depth of the texel (session 5): what a standard shadow
 // pass (shadow.wgsl) would store, the minimum over the triangles covering
 // the texel centre of their biased linear light depth there, kept as the
@@ -67,6 +71,8 @@ struct SpsmVertex {
     // The world position, interpolated (clipped fallback only: its
     // centre-sampled depth, session 6).
     @location(9) world: vec3<f32>,
+    // Bit k: edge t_k -> t_(k+1) is inner (spsm_inner_edges).
+    @location(10) @interpolate(flat) inner: u32,
 }
 
 fn spsm_world_of(index_slot: u32) -> vec3<f32> {
@@ -94,6 +100,37 @@ fn spsm_meet(n1: vec2<f32>, c1: f32, n2: vec2<f32>, c2: f32) -> vec2<f32> {
     return vec2<f32>(c1 * n2.y - c2 * n1.y, n1.x * c2 - n2.x * c1) / det;
 }
 
+// The triangle's inner edges for the light (session 7): bit k set when the
+// mesh continues across edge t_k -> t_(k+1) on the same side of the light,
+// i.e. the neighbour's opposite vertex projects to the other side of the
+// edge's line than this triangle's third vertex. Edges with no neighbour,
+// or whose neighbour folds back (a silhouette edge from the light) or
+// cannot be projected, are not inner.
+fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
+    var inner = 0u;
+    if !SPSM_INNER_EDGES {
+        return inner;
+    }
+    for (var k = 0u; k < 3u; k++) {
+        let across = scene_adjacent[first + k];
+        if across >= arrayLength(&scene_indices) {
+            continue;
+        }
+        let c = spsm_clip_of(across);
+        if c.w <= 1e-6 * w_scale {
+            continue;
+        }
+        let a = t[k];
+        let e = t[(k + 1u) % 3u] - a;
+        let own = spsm_cross(e, t[(k + 2u) % 3u] - a);
+        let other = spsm_cross(e, spsm_to_texel(c) - a);
+        if own * other < 0.0 {
+            inner |= 1u << k;
+        }
+    }
+    return inner;
+}
+
 @vertex
 fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     let first = slot - slot % 3u;
@@ -117,6 +154,7 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     out.x1 = spsm_world_of(first + 1u);
     out.x2 = spsm_world_of(first + 2u);
     out.w = vec3<f32>(c[0].w, c[1].w, c[2].w);
+    out.inner = spsm_inner_edges(first, t, w_scale);
 
     // The padded bounding box and the right triangle (lo, lo + 2 (hi - lo) x, lo + 2 (hi - lo) y) around it.
     let margin = 0.5 + 1.0 / 64.0;
@@ -283,12 +321,18 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
         min_depth = clamp(spsm_min_depth(in.t0, in.t1, in.t2, c, zeta_c, g, lowest), lowest, highest);
         spsm_store_centre(in, c);
     }
+    let reach = max(max(abs(in.t0 - c), abs(in.t1 - c)), abs(in.t2 - c));
     out.texel = vec4<u32>(
         spsm_pack_offset(in.t0 - c),
         spsm_pack_offset(in.t1 - c),
         spsm_pack_offset(in.t2 - c),
         (spsm_encode_depth(zeta_c) << 16u) | spsm_encode_gradient(g, shadow_pass.clamp.yz),
     );
+    if SPSM_INNER_EDGES && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
+        out.texel.x = spsm_pack_vertex(in.t0 - c, in.inner & 1u);
+        out.texel.y = spsm_pack_vertex(in.t1 - c, (in.inner >> 1u) & 1u);
+        out.texel.z = spsm_pack_vertex(in.t2 - c, (in.inner >> 2u) & 1u);
+    }
     out.depth = spsm_depth_key(min_depth);
     return out;
 }

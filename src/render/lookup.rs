@@ -182,7 +182,7 @@ impl LookupState {
         lookup: ShadowLookup,
         layouts: &SceneLayouts,
         unclipped_available: bool,
-        scene: (&wgpu::Buffer, &wgpu::Buffer),
+        scene: (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) -> Self {
         let spec = lookup.spec();
         // Depth bound as unfilterable float: naga cannot translate
@@ -331,7 +331,7 @@ impl ShadowPass {
         map_color: Option<wgpu::TextureFormat>,
         sgsm_slopes: bool,
         unclipped_available: bool,
-        pulled: Option<(&wgpu::Buffer, &wgpu::Buffer)>,
+        pulled: Option<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
         let storage = |binding| storage_entry(binding, wgpu::ShaderStages::VERTEX, true, false);
         let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
@@ -345,7 +345,7 @@ impl ShadowPass {
             count: None,
         }];
         if pulled.is_some() {
-            layout_entries.extend([storage(1), storage(2)]);
+            layout_entries.extend([storage(1), storage(2), storage(3)]);
         }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lixel shadow bind group layout"),
@@ -376,9 +376,10 @@ impl ShadowPass {
                 size: wgpu::BufferSize::new(std::mem::size_of::<ShadowPassRaw>() as u64),
             }),
         }];
-        if let Some((vertices, indices)) = pulled {
+        if let Some((vertices, indices, adjacent)) = pulled {
             entries.push(wgpu::BindGroupEntry { binding: 1, resource: vertices.as_entire_binding() });
             entries.push(wgpu::BindGroupEntry { binding: 2, resource: indices.as_entire_binding() });
+            entries.push(wgpu::BindGroupEntry { binding: 3, resource: adjacent.as_entire_binding() });
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lixel shadow bind group"),

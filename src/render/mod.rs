@@ -259,6 +259,9 @@ pub struct FrameReport {
 struct GpuScene {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
+    /// Per index slot, the slot of the vertex across the edge starting at
+    /// that corner (`spsm::adjacency`), for the SPSM pass's silhouette edges.
+    adjacent: wgpu::Buffer,
     index_count: u32,
     /// Per-object index ranges and bounds, for culling.
     objects: Vec<culling::ObjectBounds>,
@@ -373,6 +376,7 @@ impl Renderer {
 
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut indices = Vec::with_capacity(3 * scene.triangle_count());
+        let mut adjacent = Vec::with_capacity(3 * scene.triangle_count());
         let mut objects = Vec::with_capacity(scene.objects.len());
         for object in &scene.objects {
             let base = vertices.len() as u32;
@@ -390,6 +394,7 @@ impl Renderer {
                 albedo,
             }));
             indices.extend(object.mesh.indices.iter().map(|i| i + base));
+            adjacent.extend(spsm::adjacency::opposite_slots(&object.mesh.positions, &object.mesh.indices, first));
         }
         let aa_bias = (1e-4
             * scene
@@ -410,6 +415,16 @@ impl Renderer {
                 label: Some("lixel scene indices"),
                 contents: bytemuck::cast_slice(&indices),
                 usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            }),
+            adjacent: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lixel scene edge adjacency"),
+                // Never empty: a zero-sized storage binding is invalid.
+                contents: bytemuck::cast_slice(if adjacent.is_empty() {
+                    &[spsm::adjacency::NO_NEIGHBOUR]
+                } else {
+                    &adjacent[..]
+                }),
+                usage: wgpu::BufferUsages::STORAGE,
             }),
             index_count: indices.len() as u32,
             objects,
@@ -443,7 +458,7 @@ impl Renderer {
         };
         // The default lookup is built now, so that the first frame does not
         // pay for its pipelines.
-        let scene_buffers = (&gpu_scene.vertices, &gpu_scene.indices);
+        let scene_buffers = (&gpu_scene.vertices, &gpu_scene.indices, &gpu_scene.adjacent);
         let lookups = vec![device::capture(device, "shadow, camera and analysis pipelines", || {
             LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available, scene_buffers)
         })?];
@@ -822,7 +837,7 @@ impl Renderer {
         if let Some(i) = self.lookups.iter().position(|s| s.lookup == lookup) {
             return Ok(i);
         }
-        let scene = (&self.scene.vertices, &self.scene.indices);
+        let scene = (&self.scene.vertices, &self.scene.indices, &self.scene.adjacent);
         let state = device::capture(&self.device, "shadow, camera and analysis pipelines", || {
             LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available, scene)
         })?;

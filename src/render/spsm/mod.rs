@@ -23,6 +23,7 @@
 //! triangles stay planar; lixel's standard maps store linear light depth,
 //! which is not planar for point lights (see `shaders/spsm_common.wgsl`).
 
+pub(crate) mod adjacency;
 pub mod packing;
 
 use std::hash::{Hash, Hasher};
@@ -64,6 +65,21 @@ pub struct SpsmOptions {
     /// Where the lookup takes the standard lookup's verdict instead of its
     /// own (issue 16, session 5; see [`StandardFallback`]).
     pub standard_fallback: StandardFallback,
+    /// Inner-edge continuation (issue 16, session 7): the pass marks each
+    /// stored triangle's inner edges (the mesh continues across them on the
+    /// light's side; from the scene's edge adjacency) in its vertex words,
+    /// and a receiver outside a small stored facet only across inner edges,
+    /// far enough behind its plane (farther than its own distance to the
+    /// facet, in world units), is shadowed: a tessellated curved caster's
+    /// thin outer facets, which lose every texel to the facet nearer the
+    /// light, then still cast their shadow edges. Off in [`Self::PAPER`]:
+    /// it fixes the missing-facet class where it dominates (default preset,
+    /// configuration 5: `optimized+spsm` 1366 to 667 misclassified; a
+    /// tessellated cylinder's shadow edges in `tests/render_spsm.rs`) but
+    /// adds more false shadow than it removes elsewhere (first 20 default
+    /// lights: `focused+spsm` 1339 to 2074, `optimized+spsm` 690 to 739;
+    /// see the issue-16 note, session 7).
+    pub inner_edges: bool,
 }
 
 /// Which SPSM verdicts are replaced by the standard lookup's: the verdict
@@ -123,6 +139,7 @@ impl SpsmOptions {
         packing_tolerance: true,
         thin_casters: false,
         standard_fallback: StandardFallback::Uncertain,
+        inner_edges: false,
     };
 
     /// [`Self::PAPER`] without the [`standard_fallback`](Self::standard_fallback)
@@ -149,6 +166,7 @@ impl PartialEq for SpsmOptions {
             && self.packing_tolerance == other.packing_tolerance
             && self.thin_casters == other.thin_casters
             && self.standard_fallback == other.standard_fallback
+            && self.inner_edges == other.inner_edges
     }
 }
 
@@ -162,6 +180,7 @@ impl Hash for SpsmOptions {
             self.packing_tolerance,
             self.thin_casters,
             self.standard_fallback,
+            self.inner_edges,
         )
             .hash(state);
     }
@@ -187,11 +206,12 @@ fn constants(options: &SpsmOptions) -> String {
     let bias = if options.bias.is_finite() { options.bias } else { 0.0 };
     let fallback = options.standard_fallback.paths();
     format!(
-        "const SPSM_GRADIENT_CODE: u32 = {kind}u;\nconst SPSM_LOG_MIN: f32 = {:?};\nconst SPSM_LOG_STEP: f32 = {:?};\nconst SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\nconst SPSM_FALLBACK: u32 = {fallback}u;\n",
+        "const SPSM_GRADIENT_CODE: u32 = {kind}u;\nconst SPSM_LOG_MIN: f32 = {:?};\nconst SPSM_LOG_STEP: f32 = {:?};\nconst SPSM_EXPONENT: f32 = {exponent:?};\nconst SPSM_BIAS: f32 = {bias:?};\nconst SPSM_TOLERANCE: f32 = {:?};\nconst SPSM_THIN: bool = {};\nconst SPSM_FALLBACK: u32 = {fallback}u;\nconst SPSM_INNER_EDGES: bool = {};\n",
         packing::LOG_MIN as f32,
         ((packing::LOG_MAX / packing::LOG_MIN).ln() / 253.0) as f32,
         if options.packing_tolerance { 1.0f32 } else { 0.0 },
-        options.thin_casters
+        options.thin_casters,
+        options.inner_edges
     )
 }
 
