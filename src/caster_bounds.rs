@@ -25,6 +25,8 @@
 //! [`crate::ShadowProblem::caster_body`] builds (tested against it) and is
 //! within a few tolerances of its vertex range for the linear functions.
 
+use std::sync::{Mutex, PoisonError};
+
 use glam::{DVec3, DVec4};
 
 use crate::geometry::{maximize_in_box, padded_box, Plane};
@@ -40,8 +42,16 @@ const GROW: f64 = 2.0;
 /// The growth of a second try when the first finds no body.
 const RETRY_GROW: f64 = 1e3;
 
+/// How many linear programs' answers the bounds remember: a solve asks at
+/// most three (the depth function's two extremes and the distance's second
+/// direction).
+const REMEMBERED: usize = 4;
+
+/// A linear program's objective (as bits) and its answer.
+type Answer = Option<([u64; 3], Option<DVec3>)>;
+
 /// The caster body of one focus body, kept as the half-spaces that bound it.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub(crate) struct CasterBounds {
     /// The casters' box, padded as [`crate::geometry::ConvexPolyhedron::from_aabb`]
     /// pads it; `None` when there are no casters (empty focus, invalid box or
@@ -56,13 +66,20 @@ pub(crate) struct CasterBounds {
     /// Whether a focus vertex or the light lies in the box (then the body
     /// is not empty, whatever rounding makes of the linear programs).
     known_nonempty: bool,
+    /// The last answers of [`argmax`](Self::argmax), most recent first.
+    /// They depend only on the fields above, so they travel with the bounds
+    /// (a workspace's per-light cache keeps them): a still light and camera
+    /// ask the same objectives again and get them without solving. (A
+    /// mutex, not a cell: [`crate::Samples`] holds bounds and is shared
+    /// between threads; it is never contended.)
+    answers: Mutex<[Answer; REMEMBERED]>,
 }
 
 impl CasterBounds {
     /// No casters, with `planes` as the plane buffer (cleared).
     pub(crate) fn new(mut planes: Vec<Plane>) -> Self {
         planes.clear();
-        Self { region: None, planes, focus_far: 0.0, eps: 0.0, known_nonempty: false }
+        Self { region: None, planes, focus_far: 0.0, eps: 0.0, known_nonempty: false, answers: Mutex::default() }
     }
 
     /// The plane buffer, for reuse.
@@ -78,12 +95,14 @@ impl CasterBounds {
         self.focus_far = other.focus_far;
         self.eps = other.eps;
         self.known_nonempty = other.known_nonempty;
+        *self.answers_mut() = other.answers();
     }
 
     /// No casters (an empty focus body).
     pub(crate) fn clear(&mut self) {
         self.region = None;
         self.planes.clear();
+        *self.answers_mut() = [None; REMEMBERED];
     }
 
     /// The box `[min, max]` cut by [`planes`](Self::planes) (filled by the
@@ -92,6 +111,7 @@ impl CasterBounds {
     /// that is inverted or not finite, or a plane that is not finite, leaves
     /// no casters, as clipping by them would.
     pub(crate) fn set(&mut self, min: DVec3, max: DVec3, focus: &[DVec3], light: Option<DVec3>, eps: f64) {
+        *self.answers_mut() = [None; REMEMBERED];
         let finite = self.planes.iter().all(Plane::is_finite);
         self.region = padded_box(min, max).filter(|_| finite);
         self.focus_far = light.map_or(0.0, |l| focus.iter().map(|v| v.distance(l)).fold(0.0, f64::max));
@@ -121,7 +141,33 @@ impl CasterBounds {
     /// once more with the planes grown by [`RETRY_GROW`] tolerances, and a
     /// body known not to be empty then falls back to the box's corner (a
     /// bound over the whole box), as does a point that is not finite.
+    ///
+    /// An objective asked before (bit-equal, among the last
+    /// [`REMEMBERED`]) gets the same answer without solving again.
     fn argmax(&self, c: DVec3) -> Option<DVec3> {
+        let key = c.to_array().map(f64::to_bits);
+        if let Some(&(_, x)) = self.answers().iter().flatten().find(|(k, _)| *k == key) {
+            return x;
+        }
+        let x = self.solve(c);
+        let mut answers = self.answers.lock().unwrap_or_else(PoisonError::into_inner);
+        answers.rotate_right(1);
+        answers[0] = Some((key, x));
+        x
+    }
+
+    /// The remembered answers.
+    fn answers(&self) -> [Answer; REMEMBERED] {
+        *self.answers.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The remembered answers, to replace.
+    fn answers_mut(&mut self) -> &mut [Answer; REMEMBERED] {
+        self.answers.get_mut().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// [`argmax`](Self::argmax) without the remembered answers.
+    fn solve(&self, c: DVec3) -> Option<DVec3> {
         let (min, max) = self.region?;
         let corner = DVec3::select(c.cmpge(DVec3::ZERO), max, min);
         let solve = |grow: f64| maximize_in_box(min, max, &self.planes, grow * self.eps, c, self.eps);
@@ -158,6 +204,19 @@ impl CasterBounds {
         }
         let widen = self.widening(DVec3::X);
         Some((lower - widen, self.focus_far + widen))
+    }
+}
+
+impl Clone for CasterBounds {
+    fn clone(&self) -> Self {
+        Self {
+            region: self.region,
+            planes: self.planes.clone(),
+            focus_far: self.focus_far,
+            eps: self.eps,
+            known_nonempty: self.known_nonempty,
+            answers: Mutex::new(self.answers()),
+        }
     }
 }
 

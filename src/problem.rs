@@ -437,6 +437,22 @@ impl ShadowProblem {
         ws.caster_bounds.store(key, focus, out);
     }
 
+    /// Keeps `casters` (of `focus`, as [`Self::caster_bounds_into`] found
+    /// them, then used) in the workspace's per-light cache when they are the
+    /// kept ones, so that their remembered answers serve the next solve of a
+    /// still light and camera.
+    pub(crate) fn keep_caster_answers(
+        &self,
+        focus: &ConvexPolyhedron,
+        casters: &CasterBounds,
+        ws: &mut SolveWorkspace,
+    ) {
+        if !focus.is_empty() {
+            let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
+            ws.caster_bounds.refresh(&key, focus, casters);
+        }
+    }
+
     /// Builds the matrix for axis `axis` (light coordinates of `frame`)
     /// around `focus`, with depth covering the casters of `focus`.
     pub(crate) fn place(
@@ -451,6 +467,7 @@ impl ShadowProblem {
         let mut casters = CasterBounds::new(ws.take_planes());
         self.caster_bounds_into(focus, &mut casters, ws);
         let result = self.place_with_casters(frame, axis, focus, &casters, method, fallback, ws);
+        self.keep_caster_answers(focus, &casters, ws);
         ws.put_planes(casters.into_planes());
         result
     }

@@ -359,6 +359,16 @@ impl<T: CopyFrom> CasterCache<T> {
         hit
     }
 
+    /// Replaces the kept casters by `casters` (the same casters, with what
+    /// was learnt about them since, such as
+    /// [`CasterBounds`]'s remembered answers) if they are the ones kept for
+    /// `key` around `focus`.
+    pub(crate) fn refresh(&mut self, key: &CasterKey, focus: &ConvexPolyhedron, casters: &T) {
+        if self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus) {
+            self.casters.copy_from(casters);
+        }
+    }
+
     /// Notes that `casters` were found for `key` around `focus`; keeps them
     /// when the previous ones were found for the same key.
     pub(crate) fn store(&mut self, key: CasterKey, focus: &ConvexPolyhedron, casters: &T) {

@@ -110,9 +110,11 @@ fn solve_for(
         .ok_or(LixelError::NotInFront { method })
         .and_then(|homography| {
             problem.caster_bounds_into(focus, &mut casters, ws);
-            problem
+            let placed = problem
                 .placement(frame, axis, &points, focus.vertices(), Some(&casters), method, None)
-                .finish_checked(homography, &xs)
+                .finish_checked(homography, &xs);
+            problem.keep_caster_answers(focus, &casters, ws);
+            placed
         });
     ws.put_planes(casters.into_planes());
     ws.put_points(xs);

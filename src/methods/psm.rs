@@ -181,6 +181,7 @@ fn place(
     problem.caster_bounds_into(focus, &mut casters, ws);
     let result =
         problem.placement(frame, axis, &points, region.vertices(), Some(&casters), Method::Psm, fallback).build_in(ws);
+    problem.keep_caster_answers(focus, &casters, ws);
     ws.put_planes(casters.into_planes());
     ws.put_points(points);
     result
