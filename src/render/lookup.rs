@@ -96,6 +96,12 @@ impl ShadowLookup {
     }
 
     /// The three parts a mode provides.
+    /// Whether this lookup's shadow pass pulls whole triangles (SPSM,
+    /// SGSM), so it needs the scene's buffers and edge adjacency bound.
+    pub(crate) fn pulls_vertices(self) -> bool {
+        self.spec().pulls_vertices
+    }
+
     fn spec(self) -> LookupSpec {
         match self {
             // The antialiased and supersampled modes' bit is the depth
@@ -182,7 +188,7 @@ impl LookupState {
         lookup: ShadowLookup,
         layouts: &SceneLayouts,
         unclipped_available: bool,
-        scene: (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+        pulled: Option<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
         let spec = lookup.spec();
         // Depth bound as unfilterable float: naga cannot translate
@@ -239,7 +245,7 @@ impl LookupState {
             spec.map_color,
             sweep.is_some(),
             unclipped_available,
-            spec.pulls_vertices.then_some(scene),
+            pulled.filter(|_| spec.pulls_vertices),
         );
         let maps_spec = MapsSpec {
             layout: &maps_layout,

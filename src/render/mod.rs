@@ -260,8 +260,13 @@ struct GpuScene {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     /// Per index slot, the slot of the vertex across the edge starting at
-    /// that corner (`spsm::adjacency`), for the SPSM pass's silhouette edges.
-    adjacent: wgpu::Buffer,
+    /// that corner (`spsm::adjacency`), for the SPSM pass's silhouette edges;
+    /// built with the first lookup that pulls vertices
+    /// ([`Renderer::pulled_scene`]), so other renderers never pay for it.
+    adjacent: Option<wgpu::Buffer>,
+    /// Each object's index slots and vertices, in upload order (edges are
+    /// matched within an object).
+    object_slots: Vec<(std::ops::Range<u32>, std::ops::Range<u32>)>,
     index_count: u32,
     /// Per-object index ranges and bounds, for culling.
     objects: Vec<culling::ObjectBounds>,
@@ -376,7 +381,7 @@ impl Renderer {
 
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut indices = Vec::with_capacity(3 * scene.triangle_count());
-        let mut adjacent = Vec::with_capacity(3 * scene.triangle_count());
+        let mut object_slots = Vec::with_capacity(scene.objects.len());
         let mut objects = Vec::with_capacity(scene.objects.len());
         for object in &scene.objects {
             let base = vertices.len() as u32;
@@ -394,7 +399,7 @@ impl Renderer {
                 albedo,
             }));
             indices.extend(object.mesh.indices.iter().map(|i| i + base));
-            adjacent.extend(spsm::adjacency::opposite_slots(&object.mesh.positions, &object.mesh.indices, first));
+            object_slots.push((first..first + count, base..base + object.mesh.positions.len() as u32));
         }
         let aa_bias = (1e-4
             * scene
@@ -416,16 +421,8 @@ impl Renderer {
                 contents: bytemuck::cast_slice(&indices),
                 usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             }),
-            adjacent: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("lixel scene edge adjacency"),
-                // Never empty: a zero-sized storage binding is invalid.
-                contents: bytemuck::cast_slice(if adjacent.is_empty() {
-                    &[spsm::adjacency::NO_NEIGHBOUR]
-                } else {
-                    &adjacent[..]
-                }),
-                usage: wgpu::BufferUsages::STORAGE,
-            }),
+            adjacent: None,
+            object_slots,
             index_count: indices.len() as u32,
             objects,
         })?;
@@ -458,9 +455,9 @@ impl Renderer {
         };
         // The default lookup is built now, so that the first frame does not
         // pay for its pipelines.
-        let scene_buffers = (&gpu_scene.vertices, &gpu_scene.indices, &gpu_scene.adjacent);
+        // (It pulls no vertices, so it needs no edge adjacency.)
         let lookups = vec![device::capture(device, "shadow, camera and analysis pipelines", || {
-            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available, scene_buffers)
+            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available, None)
         })?];
         let ring = ReadbackRing::new(
             device,
@@ -837,12 +834,59 @@ impl Renderer {
         if let Some(i) = self.lookups.iter().position(|s| s.lookup == lookup) {
             return Ok(i);
         }
-        let scene = (&self.scene.vertices, &self.scene.indices, &self.scene.adjacent);
+        if lookup.pulls_vertices() {
+            self.ensure_adjacency()?;
+        }
+        let scene = &self.scene;
+        let pulled = scene.adjacent.as_ref().map(|adjacent| (&scene.vertices, &scene.indices, adjacent));
         let state = device::capture(&self.device, "shadow, camera and analysis pipelines", || {
-            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available, scene)
+            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available, pulled)
         })?;
         self.lookups.push(state);
         Ok(self.lookups.len() - 1)
+    }
+
+    /// Builds the scene's edge adjacency (`spsm::adjacency`) from the
+    /// uploaded vertices and indices, once: only lookups that pull vertices
+    /// (SPSM, SGSM) read it, and no CPU copy of the scene is kept.
+    fn ensure_adjacency(&mut self) -> Result<(), RenderError> {
+        if self.scene.adjacent.is_some() {
+            return Ok(());
+        }
+        let words = self.read_buffer_words(&self.scene.vertices, 0, self.scene.vertices.size() / 4)?;
+        let words_per_vertex = std::mem::size_of::<VertexRaw>() / 4;
+        let positions: Vec<Vec3> = words
+            .chunks_exact(words_per_vertex)
+            .map(|v| Vec3::new(f32::from_bits(v[0]), f32::from_bits(v[1]), f32::from_bits(v[2])))
+            .collect();
+        let indices = self.read_buffer_words(&self.scene.indices, 0, u64::from(self.scene.index_count))?;
+        let mut adjacent = Vec::with_capacity(indices.len());
+        for (slots, vertices) in &self.scene.object_slots {
+            let (Some(own), Some(own_positions)) = (
+                indices.get(slots.start as usize..slots.end as usize),
+                positions.get(vertices.start as usize..vertices.end as usize),
+            ) else {
+                // The read-back is the uploaded size; shorter means it failed.
+                return Err(RenderError::Map(wgpu::BufferAsyncError));
+            };
+            // Object-local indices, as the object's mesh holds them.
+            let local: Vec<u32> = own.iter().map(|&i| i.wrapping_sub(vertices.start)).collect();
+            adjacent.extend(spsm::adjacency::opposite_slots(own_positions, &local, slots.start));
+        }
+        let buffer = device::capture(&self.device, "scene edge adjacency", || {
+            self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lixel scene edge adjacency"),
+                // Never empty: a zero-sized storage binding is invalid.
+                contents: bytemuck::cast_slice(if adjacent.is_empty() {
+                    &[spsm::adjacency::NO_NEIGHBOUR]
+                } else {
+                    &adjacent[..]
+                }),
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        })?;
+        self.scene.adjacent = Some(buffer);
+        Ok(())
     }
 
     /// Camera, lights of both scene passes and the shadow passes' slots

@@ -602,7 +602,7 @@ impl Renderer {
     }
 
     /// `count` words of `buffer` from word `first`, after the queue's work.
-    pub(super) fn read_buffer_words(
+    pub(in crate::render) fn read_buffer_words(
         &self,
         buffer: &wgpu::Buffer,
         first: u64,
