@@ -437,20 +437,25 @@ impl ShadowProblem {
         ws.caster_bounds.store(key, focus, out);
     }
 
-    /// Keeps `casters` (of `focus`, as [`Self::caster_bounds_into`] found
-    /// them, then used) in the workspace's per-light cache when they are the
-    /// kept ones, so that their remembered answers serve the next solve of a
-    /// still light and camera.
-    pub(crate) fn keep_caster_answers(
+    /// Runs `place` with the casters of `focus` ([`Self::caster_bounds_into`]),
+    /// then keeps them in the workspace's per-light cache when they are the
+    /// kept ones, so that the answers they remembered serve the next solve
+    /// of a still light and camera.
+    pub(crate) fn with_casters<T>(
         &self,
         focus: &ConvexPolyhedron,
-        casters: &CasterBounds,
         ws: &mut SolveWorkspace,
-    ) {
+        place: impl FnOnce(&CasterBounds, &mut SolveWorkspace) -> T,
+    ) -> T {
+        let mut casters = CasterBounds::new(ws.take_planes());
+        self.caster_bounds_into(focus, &mut casters, ws);
+        let result = place(&casters, ws);
         if !focus.is_empty() {
             let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
-            ws.caster_bounds.refresh(&key, focus, casters);
+            ws.caster_bounds.refresh(&key, focus, &casters);
         }
+        ws.put_planes(casters.into_planes());
+        result
     }
 
     /// Builds the matrix for axis `axis` (light coordinates of `frame`)
@@ -464,12 +469,9 @@ impl ShadowProblem {
         fallback: Option<Fallback>,
         ws: &mut SolveWorkspace,
     ) -> Result<LightMatrix> {
-        let mut casters = CasterBounds::new(ws.take_planes());
-        self.caster_bounds_into(focus, &mut casters, ws);
-        let result = self.place_with_casters(frame, axis, focus, &casters, method, fallback, ws);
-        self.keep_caster_answers(focus, &casters, ws);
-        ws.put_planes(casters.into_planes());
-        result
+        self.with_casters(focus, ws, |casters, ws| {
+            self.place_with_casters(frame, axis, focus, casters, method, fallback, ws)
+        })
     }
 
     /// [`Self::place`] with the casters of `focus` already bounded.

@@ -25,7 +25,6 @@
 
 use glam::{DMat3, DVec2, DVec3};
 
-use crate::caster_bounds::CasterBounds;
 use crate::error::{LixelError, Result};
 use crate::geometry::ConvexPolyhedron;
 use crate::light::LightFrame;
@@ -105,18 +104,15 @@ fn solve_for(
         SnapGrid { axis, basis, map: problem.map_size(), steps_per_octave: options.steps_per_octave, margin: 0.0 };
     // Depth covers the casters and all of the focus, a vertex at the light
     // included (as for the other uniform maps).
-    let mut casters = CasterBounds::new(ws.take_planes());
     let result = snapped_homography(&frame, problem.tolerances(), &grid, &xs)
         .ok_or(LixelError::NotInFront { method })
         .and_then(|homography| {
-            problem.caster_bounds_into(focus, &mut casters, ws);
-            let placed = problem
-                .placement(frame, axis, &points, focus.vertices(), Some(&casters), method, None)
-                .finish_checked(homography, &xs);
-            problem.keep_caster_answers(focus, &casters, ws);
-            placed
+            problem.with_casters(focus, ws, |casters, _| {
+                problem
+                    .placement(frame, axis, &points, focus.vertices(), Some(casters), method, None)
+                    .finish_checked(homography, &xs)
+            })
         });
-    ws.put_planes(casters.into_planes());
     ws.put_points(xs);
     ws.put_points(points);
     result

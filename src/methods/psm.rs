@@ -28,7 +28,6 @@
 
 use glam::{DMat4, DVec3, DVec4};
 
-use crate::caster_bounds::CasterBounds;
 use crate::error::Result;
 use crate::geometry::{min_enclosing_cone_in, ConvexPolyhedron};
 use crate::light::LightFrame;
@@ -177,12 +176,9 @@ fn place(
     // (for `H`, which holds casters itself, the light included when it lies
     // in `S`: such a map needs unclipped depth).
     ws.put_points(more);
-    let mut casters = CasterBounds::new(ws.take_planes());
-    problem.caster_bounds_into(focus, &mut casters, ws);
-    let result =
-        problem.placement(frame, axis, &points, region.vertices(), Some(&casters), Method::Psm, fallback).build_in(ws);
-    problem.keep_caster_answers(focus, &casters, ws);
-    ws.put_planes(casters.into_planes());
+    let result = problem.with_casters(focus, ws, |casters, ws| {
+        problem.placement(frame, axis, &points, region.vertices(), Some(casters), Method::Psm, fallback).build_in(ws)
+    });
     ws.put_points(points);
     result
 }
