@@ -205,13 +205,23 @@ impl<'a> Runner<'a> {
         ShadowProblem::new(self.camera, light, self.shared.scene.bounds(), ShadowMapSize::square(map))
     }
 
-    /// Renders the camera view with `matrix` (masks included) and waits for it.
-    pub(super) fn render_view(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<(), ExperimentError> {
+    /// Renders the camera view with `matrix` (masks included) and waits for
+    /// it; with `masks_only`, not when the last frame already wrote its masks
+    /// ([`Renderer::has_masks_of`]: an optimized loop's last frame).
+    pub(super) fn render_view(
+        &mut self,
+        matrix: &LightMatrix,
+        lookup: ShadowLookup,
+        masks_only: bool,
+    ) -> Result<(), ExperimentError> {
         // One map per light: no cascades left over from a cascade method.
         self.renderer.set_cascades(0, None);
         let lights = std::slice::from_ref(matrix);
-        let report =
-            self.renderer.render(&Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup })?;
+        let frame = Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup };
+        if masks_only && self.renderer.has_masks_of(&frame) {
+            return Ok(());
+        }
+        let report = self.renderer.render(&frame)?;
         Ok(self.renderer.wait_for(&report.submission)?)
     }
 
@@ -233,14 +243,7 @@ impl<'a> Runner<'a> {
     /// # Errors
     /// Renderer failures.
     pub fn masks_with(&mut self, matrix: &LightMatrix, lookup: ShadowLookup) -> Result<ShadowMasks, ExperimentError> {
-        // One map per light: no cascades left over from a cascade method.
-        self.renderer.set_cascades(0, None);
-        let lights = std::slice::from_ref(matrix);
-        let frame = Frame { camera: &self.camera, lights, masks: true, analysis: None, lookup };
-        if !self.renderer.has_masks_of(&frame) {
-            let report = self.renderer.render(&frame)?;
-            self.renderer.wait_for(&report.submission)?;
-        }
+        self.render_view(matrix, lookup, true)?;
         Ok(self.renderer.read_masks()?)
     }
 
@@ -261,7 +264,7 @@ impl<'a> Runner<'a> {
         matrix: &LightMatrix,
         lookup: ShadowLookup,
     ) -> Result<image::RgbaImage, ExperimentError> {
-        self.render_view(matrix, lookup)?;
+        self.render_view(matrix, lookup, false)?;
         Ok(self.renderer.read_color()?)
     }
 
