@@ -364,7 +364,11 @@ fn triangle_tiles(b: vec4<f32>) -> vec4<i32> {
 }
 
 fn stored_box(t: u32) -> vec4<f32> {
-    let i = params.box_base + 4u * t;
+    return load_box(params.box_base + 4u * t);
+}
+
+// The four floats `store_box` wrote from index `i` of `tile_list`.
+fn load_box(i: u32) -> vec4<f32> {
     return vec4<f32>(
         bitcast<f32>(tile_list[i]),
         bitcast<f32>(tile_list[i + 1u]),
@@ -392,6 +396,14 @@ fn screen_box(t: u32) -> vec4<f32> {
     return vec4<f32>(lo, hi);
 }
 
+// A box's four floats as words of `tile_list` from index `i`.
+fn store_box(i: u32, b: vec4<f32>) {
+    tile_list[i] = bitcast<u32>(b.x);
+    tile_list[i + 1u] = bitcast<u32>(b.y);
+    tile_list[i + 2u] = bitcast<u32>(b.z);
+    tile_list[i + 3u] = bitcast<u32>(b.w);
+}
+
 @compute @workgroup_size(64)
 fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let t = flat_id(gid, groups);
@@ -399,17 +411,8 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
         return;
     }
     let b = triangle_box(t);
-    let i = params.box_base + 4u * t;
-    tile_list[i] = bitcast<u32>(b.x);
-    tile_list[i + 1u] = bitcast<u32>(b.y);
-    tile_list[i + 2u] = bitcast<u32>(b.z);
-    tile_list[i + 3u] = bitcast<u32>(b.w);
-    let s = screen_box(t);
-    let j = params.screen_base + 4u * t;
-    tile_list[j] = bitcast<u32>(s.x);
-    tile_list[j + 1u] = bitcast<u32>(s.y);
-    tile_list[j + 2u] = bitcast<u32>(s.z);
-    tile_list[j + 3u] = bitcast<u32>(s.w);
+    store_box(params.box_base + 4u * t, b);
+    store_box(params.screen_base + 4u * t, screen_box(t));
     let r = triangle_tiles(b);
     for (var ty = r.y; ty <= r.w; ty++) {
         for (var tx = r.x; tx <= r.z; tx++) {
@@ -971,10 +974,8 @@ fn on_screen_near(tri: u32, xy: vec2<f32>) -> bool {
     if params.gate == 0u {
         return true;
     }
-    let i = params.screen_base + 4u * tri;
-    let lo = vec2<f32>(bitcast<f32>(tile_list[i]), bitcast<f32>(tile_list[i + 1u]));
-    let hi = vec2<f32>(bitcast<f32>(tile_list[i + 2u]), bitcast<f32>(tile_list[i + 3u]));
-    return all(lo <= xy + vec2<f32>(1.25)) && all(hi >= xy - vec2<f32>(0.25));
+    let b = load_box(params.screen_base + 4u * tri);
+    return all(b.xy <= xy + vec2<f32>(1.25)) && all(b.zw >= xy - vec2<f32>(0.25));
 }
 
 // The exact path, one invocation per queued pixel (the dispatch covers
