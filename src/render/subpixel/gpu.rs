@@ -67,8 +67,8 @@ pub struct AaStats {
     pub triangle_tests: u32,
     /// Of [`exact_pixels`](Self::exact_pixels), those without a silhouette
     /// texel in the footprint that took the exact path because their depth
-    /// compare is uncertain (a grazing surface, or the map's depth within
-    /// the bias band of the receiver's).
+    /// compare is uncertain (the map's depth within the bias band of the
+    /// receiver's, or a degenerate footprint).
     pub uncertain_pixels: u32,
 }
 
