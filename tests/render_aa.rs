@@ -552,3 +552,29 @@ fn uncertain_pixels_take_the_exact_path() {
     assert!(stats.uncertain_pixels > 0, "{stats:?}");
     assert!(e_on < 0.75 * e_off, "{e_on} against {e_off}");
 }
+
+/// A surface grazing the light is not uncertain by itself: a directional
+/// light 2.7° above the floor, no caster near most of the floor. Session
+/// 7's rule took every facing pixel within 5° of grazing, which sent the
+/// whole floor to the exact path (about 100 000 pixels on each of the
+/// default preset's four lights 1°–5° above the horizon) for words that
+/// scored exactly as those of the bias-band test alone. Now only pixels
+/// whose map depth lies in the band are uncertain: under 5% of the pixels
+/// facing the light.
+#[test]
+fn a_grazing_floor_is_not_uncertain_by_itself() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let cam = camera(96);
+    let light = lixel::Light::directional(glam::DVec3::new(1.0, -0.05, 0.3));
+    let m = matrices(&scene, &cam, &[light], 256, &Parameterization::Focused)[0];
+    let options = lixel::experiment::experiment_renderer_options();
+    let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+    renderer.render(&Frame { masks: true, lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
+    let masks = renderer.read_masks().unwrap();
+    let facing = masks.facing.iter().filter(|&&f| f & 1 != 0).count() as u32;
+    let stats = renderer.read_aa_stats(0).unwrap();
+    eprintln!("{facing} pixels facing the light; {stats:?}");
+    assert!(facing > 2000, "{facing} pixels facing the light");
+    assert!(stats.uncertain_pixels * 20 < facing, "{stats:?} of {facing} facing pixels");
+}
