@@ -308,88 +308,170 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     classes.fill(grid, bits);
     // Slots beyond `all` (none from the callers) are ignored.
     let slots = if all.len() >= 32 { u32::MAX } else { (1u32 << all.len()) - 1 };
+    // The camera's side of every surface (`Camera::towards_viewer`, with
+    // the eye made once rather than per boundary pixel: the same bits).
+    let viewer =
+        if camera.is_orthographic() { Viewer::Direction(-camera.view_direction()) } else { Viewer::Eye(camera.eye()) };
+    // The work at one covered pixel with an active slot (shadowed or at a
+    // shadow boundary), in pixel order: its relevant samples, and its
+    // boundary samples for the slots in `mixed_bits`.
+    let visit = |all: &mut [Samples],
+                 (x, y): (usize, usize),
+                 (sx, sy): (f64, f64),
+                 row: DVec4,
+                 column: DVec4,
+                 shadowed_bits: u32,
+                 mixed_bits: u32| {
+        let i = y * w + x;
+        let active = shadowed_bits | mixed_bits;
+        let d = grid.depth[i];
+        let here = unproject(column, row, d);
+        if !(here.w > 0.0) || !here.is_finite() {
+            for bit in set_bits(active) {
+                all[bit].counts.rejected_invalid += 1;
+            }
+            return;
+        }
+        let world = here.truncate() / here.w;
+        // Light-independent surface derivatives, computed on first use.
+        let mut surface: Option<Option<Surface>> = None;
+        for bit in set_bits(active) {
+            let samples = &mut all[bit];
+            let rows = &rows[bit];
+            let x_light = to_light(rows, here);
+            samples.relevant.push(x_light);
+            samples.relevant_world.push(world);
+            if mixed_bits >> bit & 1 == 0 {
+                continue;
+            }
+            samples.counts.boundary_candidates += 1;
+            let found = *surface.get_or_insert_with(|| {
+                surface_at(grid, &world_from_screen, viewer, options, (x, y), (sx, sy, d), here, world, step, &depth_at)
+            });
+            let Some(found) = found else {
+                samples.counts.rejected_discontinuity += 1;
+                continue;
+            };
+            let sample = match found {
+                Surface::Given { tx, ty, .. } => {
+                    let along = |t: DVec3| to_light(rows, t.extend(0.0));
+                    BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+                }
+                Surface::Depth { dx4, dy4, .. } => {
+                    BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
+                }
+            };
+            if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
+                samples.counts.rejected_back_facing += 1;
+                continue;
+            }
+            samples.boundary.push(sample);
+            samples.boundary_world.push(world);
+        }
+    };
     // Counted here and added at the end: the counts are the same, without
     // a loop over every light at every pixel.
     let mut covered = 0usize;
     let mut shadowed = [0usize; 32];
-    for y in 0..h {
-        let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-        let row = m.y_axis * sy;
-        for (x, &(sx, column)) in columns.iter().enumerate() {
-            let i = y * w + x;
-            if !grid.depth[i].is_finite() {
-                continue;
+    if classes.one && slots & 1 != 0 {
+        // One light: eight pixels' classes at a time, as bytes of a `u64`
+        // (bit 0 of each byte), so that runs without an active pixel cost
+        // a few instructions per eight pixels; then only the active pixels
+        // are visited, in the same order as the per-pixel loop below.
+        let words = |y: usize| {
+            let (class, near) = (&classes.class8[y * w..][..w], &classes.near8[y * w..][..w]);
+            class.chunks(8).zip(near.chunks(8)).enumerate().map(|(k, (c, n))| {
+                let (c, n) = (le_word(c), le_word(n));
+                let valid = (c | c >> 1) & BYTE_LOW_BITS;
+                let shadow = c & BYTE_LOW_BITS;
+                let mixed = n & n >> 1 & valid;
+                (8 * k, valid, shadow, mixed)
+            })
+        };
+        // Exact capacities first (a fresh `Samples` would otherwise grow
+        // each list a dozen times, copying it each time).
+        let (mut relevant, mut boundary) = (0usize, 0usize);
+        for y in 0..h {
+            for (_, valid, shadow, mixed) in words(y) {
+                covered += valid.count_ones() as usize;
+                shadowed[0] += shadow.count_ones() as usize;
+                relevant += (shadow | mixed).count_ones() as usize;
+                boundary += mixed.count_ones() as usize;
             }
-            let (shadowed_bits, mixed_bits) = classes.at(i);
-            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-            covered += 1;
-            for bit in set_bits(shadowed_bits) {
-                shadowed[bit] += 1;
-            }
-            let active = shadowed_bits | mixed_bits;
-            if active == 0 {
-                continue;
-            }
-            let d = grid.depth[i];
-            let here = unproject(column, row, d);
-            if !(here.w > 0.0) || !here.is_finite() {
-                for bit in set_bits(active) {
-                    all[bit].counts.rejected_invalid += 1;
+        }
+        let samples = &mut all[0];
+        samples.relevant.reserve_exact(relevant);
+        samples.relevant_world.reserve_exact(relevant);
+        samples.boundary.reserve_exact(boundary);
+        samples.boundary_world.reserve_exact(boundary);
+        for y in 0..h {
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let row = m.y_axis * sy;
+            for (x0, _, shadow, mixed) in words(y) {
+                let mut active = shadow | mixed;
+                while active != 0 {
+                    let byte = active.trailing_zeros() / 8;
+                    active &= !(0xff << (8 * byte));
+                    let x = x0 + byte as usize;
+                    let (sx, column) = columns[x];
+                    let (s, b) = ((shadow >> (8 * byte)) as u32 & 1, (mixed >> (8 * byte)) as u32 & 1);
+                    visit(all, (x, y), (sx, sy), row, column, s, b);
                 }
-                continue;
             }
-            let world = here.truncate() / here.w;
-            // Light-independent surface derivatives, computed on first use.
-            let mut surface: Option<Option<Surface>> = None;
-            for bit in set_bits(active) {
-                let samples = &mut all[bit];
-                let rows = &rows[bit];
-                let x_light = to_light(rows, here);
-                samples.relevant.push(x_light);
-                samples.relevant_world.push(world);
-                if mixed_bits >> bit & 1 == 0 {
+        }
+    } else {
+        for y in 0..h {
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let row = m.y_axis * sy;
+            for (x, &(sx, column)) in columns.iter().enumerate() {
+                let i = y * w + x;
+                if !grid.depth[i].is_finite() {
                     continue;
                 }
-                samples.counts.boundary_candidates += 1;
-                let found = *surface.get_or_insert_with(|| {
-                    surface_at(
-                        grid,
-                        &world_from_screen,
-                        &camera,
-                        options,
-                        (x, y),
-                        (sx, sy, d),
-                        here,
-                        world,
-                        step,
-                        &depth_at,
-                    )
-                });
-                let Some(found) = found else {
-                    samples.counts.rejected_discontinuity += 1;
-                    continue;
-                };
-                let sample = match found {
-                    Surface::Given { tx, ty, .. } => {
-                        let along = |t: DVec3| to_light(rows, t.extend(0.0));
-                        BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
-                    }
-                    Surface::Depth { dx4, dy4, .. } => {
-                        BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
-                    }
-                };
-                if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
-                    samples.counts.rejected_back_facing += 1;
+                let (shadowed_bits, mixed_bits) = classes.at(i);
+                let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+                covered += 1;
+                for bit in set_bits(shadowed_bits) {
+                    shadowed[bit] += 1;
+                }
+                if shadowed_bits | mixed_bits == 0 {
                     continue;
                 }
-                samples.boundary.push(sample);
-                samples.boundary_world.push(world);
+                visit(all, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
             }
         }
     }
     for (samples, &shadowed) in all.iter_mut().zip(&shadowed) {
         samples.counts.covered += covered;
         samples.counts.shadowed += shadowed;
+    }
+}
+
+/// Bit 0 of every byte of a `u64`.
+const BYTE_LOW_BITS: u64 = 0x0101_0101_0101_0101;
+
+/// Up to eight bytes as a little-endian `u64` (missing bytes zero).
+fn le_word(bytes: &[u8]) -> u64 {
+    let mut word = [0u8; 8];
+    word[..bytes.len()].copy_from_slice(bytes);
+    u64::from_le_bytes(word)
+}
+
+/// Where the camera is seen from a surface point ([`crate::Camera::towards_viewer`]).
+#[derive(Clone, Copy)]
+enum Viewer {
+    /// Orthographic: the same direction everywhere.
+    Direction(DVec3),
+    /// Perspective: the eye.
+    Eye(DVec3),
+}
+
+impl Viewer {
+    fn towards(self, world: DVec3) -> DVec3 {
+        match self {
+            Self::Direction(d) => d,
+            Self::Eye(eye) => eye - world,
+        }
     }
 }
 
@@ -426,7 +508,7 @@ impl Surface {
 fn surface_at(
     grid: &Grid,
     world_from_screen: &glam::DMat4,
-    camera: &crate::Camera,
+    viewer: Viewer,
     options: &SampleOptions,
     (x, y): (usize, usize),
     (sx, sy, d): (f64, f64, f64),
@@ -468,7 +550,7 @@ fn surface_at(
             let tx = (dx4.truncate() - world * dx4.w) / here.w;
             let ty = (dy4.truncate() - world * dy4.w) / here.w;
             let mut normal = tx.cross(ty).normalize_or_zero();
-            if normal.dot(camera.towards_viewer(world)) < 0.0 {
+            if normal.dot(viewer.towards(world)) < 0.0 {
                 normal = -normal;
             }
             // Homogeneous point and its homogeneous derivatives: one scale.
