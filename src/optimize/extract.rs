@@ -123,6 +123,13 @@ impl Grid {
         self.bits.clear();
         self.normals.clear();
         self.has_normals = readback.normals.is_some();
+        // Filled row by row: sized once (a fresh workspace would otherwise
+        // grow each buffer a dozen times, copying it each time).
+        self.depth.reserve_exact(w * h);
+        self.bits.reserve_exact(w * h);
+        if self.has_normals {
+            self.normals.reserve_exact(w * h);
+        }
         // Row by row over exact-size slices (a flat_map over rows was half
         // the cost of a one-light extraction).
         for y in 0..h {
@@ -173,8 +180,18 @@ fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
     tmp.clear();
     tmp.resize(src.len(), T::default());
     for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
-        for x in 0..w {
-            t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
+        if w < 3 {
+            for x in 0..w {
+                t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
+            }
+            continue;
+        }
+        // The edges clamped, the interior as three shifted slices (no
+        // index arithmetic per pixel, so it vectorizes).
+        t[0] = s[0] | s[1];
+        t[w - 1] = s[w - 2] | s[w - 1];
+        for (((t, &l), &c), &r) in t[1..w - 1].iter_mut().zip(&s[..w - 2]).zip(&s[1..w - 1]).zip(&s[2..]) {
+            *t = l | c | r;
         }
     }
     dst.clear();
@@ -182,8 +199,8 @@ fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
     for y in 0..h {
         let (above, here, below) =
             (&tmp[y.saturating_sub(1) * w..][..w], &tmp[y * w..][..w], &tmp[(y + 1).min(h - 1) * w..][..w]);
-        for (x, cell) in dst[y * w..][..w].iter_mut().enumerate() {
-            *cell = above[x] | here[x] | below[x];
+        for (((cell, &a), &m), &b) in dst[y * w..][..w].iter_mut().zip(above).zip(here).zip(below) {
+            *cell = a | m | b;
         }
     }
 }
@@ -451,10 +468,12 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
 const BYTE_LOW_BITS: u64 = 0x0101_0101_0101_0101;
 
 /// Up to eight bytes as a little-endian `u64` (missing bytes zero).
+#[inline(always)]
 fn le_word(bytes: &[u8]) -> u64 {
-    let mut word = [0u8; 8];
-    word[..bytes.len()].copy_from_slice(bytes);
-    u64::from_le_bytes(word)
+    match <[u8; 8]>::try_from(bytes) {
+        Ok(word) => u64::from_le_bytes(word),
+        Err(_) => bytes.iter().rev().fold(0, |word, &b| word << 8 | u64::from(b)),
+    }
 }
 
 /// Where the camera is seen from a surface point ([`crate::Camera::towards_viewer`]).
@@ -591,4 +610,57 @@ pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) ->
         Light::Point { position } | Light::Spot { position, .. } => (position - p).normalize_or_zero(),
     };
     n.dot(to_light) > min_cosine
+}
+
+#[cfg(test)]
+mod tests {
+    use super::or_3x3;
+
+    /// The 3x3 OR with clamped edges, pixel by pixel.
+    fn reference(src: &[u64], w: usize, h: usize) -> Vec<u64> {
+        let mut out = vec![0; src.len()];
+        for y in 0..h {
+            for x in 0..w {
+                for dy in [-1isize, 0, 1] {
+                    for dx in [-1isize, 0, 1] {
+                        let yy = y.saturating_add_signed(dy).min(h - 1);
+                        let xx = x.saturating_add_signed(dx).min(w - 1);
+                        out[y * w + x] |= src[yy * w + xx];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn or_3x3_equals_the_pixel_by_pixel_or() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let (mut tmp, mut dst) = (Vec::new(), Vec::new());
+        for w in 1..=11 {
+            for h in 1..=5 {
+                // Sparse single bits, so that a missed neighbour shows.
+                let src: Vec<u64> = (0..w * h)
+                    .map(|_| {
+                        state ^= state << 13;
+                        state ^= state >> 7;
+                        state ^= state << 17;
+                        if state % 4 == 0 {
+                            1 << (state >> 58)
+                        } else {
+                            0
+                        }
+                    })
+                    .collect();
+                or_3x3(&src, w, h, &mut tmp, &mut dst);
+                assert_eq!(dst, reference(&src, w, h), "{w}x{h}");
+                let bytes: Vec<u8> = src.iter().map(|&v| (v | v >> 8 | v >> 16 | v >> 24) as u8).collect();
+                let (mut tmp8, mut dst8) = (Vec::new(), Vec::new());
+                or_3x3(&bytes, w, h, &mut tmp8, &mut dst8);
+                let wide: Vec<u64> = bytes.iter().map(|&b| u64::from(b)).collect();
+                let expected: Vec<u8> = reference(&wide, w, h).iter().map(|&v| v as u8).collect();
+                assert_eq!(dst8, expected, "{w}x{h} bytes");
+            }
+        }
+    }
 }
