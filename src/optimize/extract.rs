@@ -410,10 +410,10 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         let (mut relevant, mut boundary) = (0usize, 0usize);
         for y in 0..h {
             for (_, valid, shadow, mixed) in words(y) {
-                covered += valid.count_ones() as usize;
-                shadowed[0] += shadow.count_ones() as usize;
-                relevant += (shadow | mixed).count_ones() as usize;
-                boundary += mixed.count_ones() as usize;
+                covered += byte_sum(valid);
+                shadowed[0] += byte_sum(shadow);
+                relevant += byte_sum(shadow | mixed);
+                boundary += byte_sum(mixed);
             }
         }
         let samples = &mut all[0];
@@ -437,6 +437,31 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             }
         }
     } else {
+        // Counts and exact capacities first, as for one light.
+        let (mut relevant, mut boundary) = ([0usize; 32], [0usize; 32]);
+        for (i, d) in grid.depth.iter().enumerate() {
+            if !d.is_finite() {
+                continue;
+            }
+            let (shadowed_bits, mixed_bits) = classes.at(i);
+            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+            covered += 1;
+            for bit in set_bits(shadowed_bits) {
+                shadowed[bit] += 1;
+            }
+            for bit in set_bits(shadowed_bits | mixed_bits) {
+                relevant[bit] += 1;
+            }
+            for bit in set_bits(mixed_bits) {
+                boundary[bit] += 1;
+            }
+        }
+        for ((samples, &relevant), &boundary) in all.iter_mut().zip(&relevant).zip(&boundary) {
+            samples.relevant.reserve_exact(relevant);
+            samples.relevant_world.reserve_exact(relevant);
+            samples.boundary.reserve_exact(boundary);
+            samples.boundary_world.reserve_exact(boundary);
+        }
         for y in 0..h {
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let row = m.y_axis * sy;
@@ -447,10 +472,6 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                 }
                 let (shadowed_bits, mixed_bits) = classes.at(i);
                 let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-                covered += 1;
-                for bit in set_bits(shadowed_bits) {
-                    shadowed[bit] += 1;
-                }
                 if shadowed_bits | mixed_bits == 0 {
                     continue;
                 }
@@ -466,6 +487,13 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
 
 /// Bit 0 of every byte of a `u64`.
 const BYTE_LOW_BITS: u64 = 0x0101_0101_0101_0101;
+
+/// The sum of a `u64`'s bytes when it is at most 255 (here: of bits 0):
+/// one multiply, without a population count instruction.
+#[inline(always)]
+fn byte_sum(word: u64) -> usize {
+    (word.wrapping_mul(BYTE_LOW_BITS) >> 56) as usize
+}
 
 /// Up to eight bytes as a little-endian `u64` (missing bytes zero).
 #[inline(always)]
