@@ -437,8 +437,16 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             }
         }
     } else {
-        // Counts and exact capacities first, as for one light.
-        let (mut relevant, mut boundary) = ([0usize; 32], [0usize; 32]);
+        // Counts first; for a fresh `Samples` (no capacity yet) also its
+        // lists' exact sizes, as for one light (reused samples have grown
+        // to fit already, and counting every light's relevant pixels costs
+        // a loop over the set bits).
+        let fresh = all
+            .iter()
+            .enumerate()
+            .fold(0u32, |fresh, (k, samples)| fresh | u32::from(samples.relevant.capacity() == 0) << k)
+            & slots;
+        let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
         for (i, d) in grid.depth.iter().enumerate() {
             if !d.is_finite() {
                 continue;
@@ -449,18 +457,18 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             for bit in set_bits(shadowed_bits) {
                 shadowed[bit] += 1;
             }
-            for bit in set_bits(shadowed_bits | mixed_bits) {
-                relevant[bit] += 1;
-            }
-            for bit in set_bits(mixed_bits) {
+            for bit in set_bits(mixed_bits & fresh) {
                 boundary[bit] += 1;
+                mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
             }
         }
-        for ((samples, &relevant), &boundary) in all.iter_mut().zip(&relevant).zip(&boundary) {
+        for bit in set_bits(fresh) {
+            let samples = &mut all[bit];
+            let relevant = shadowed[bit] + mixed_only[bit];
             samples.relevant.reserve_exact(relevant);
             samples.relevant_world.reserve_exact(relevant);
-            samples.boundary.reserve_exact(boundary);
-            samples.boundary_world.reserve_exact(boundary);
+            samples.boundary.reserve_exact(boundary[bit]);
+            samples.boundary_world.reserve_exact(boundary[bit]);
         }
         for y in 0..h {
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
