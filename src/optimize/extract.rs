@@ -323,8 +323,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     }
     let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
     classes.fill(grid, bits);
-    // Slots beyond `all` (none from the callers) are ignored.
-    let slots = if all.len() >= 32 { u32::MAX } else { (1u32 << all.len()) - 1 };
+    let classes = &*classes;
     // The camera's side of every surface (`Camera::towards_viewer`, with
     // the eye made once rather than per boundary pixel: the same bits).
     let viewer =
@@ -333,6 +332,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     // shadow boundary), in pixel order: its relevant samples, and its
     // boundary samples for the slots in `mixed_bits`.
     let visit = |all: &mut [Samples],
+                 first: usize,
                  (x, y): (usize, usize),
                  (sx, sy): (f64, f64),
                  row: DVec4,
@@ -353,7 +353,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         // Light-independent surface derivatives, computed on first use.
         let mut surface: Option<Option<Surface>> = None;
         for bit in set_bits(active) {
-            let samples = &mut all[bit];
+            let samples = &mut all[bit - first];
             let rows = &rows[bit];
             let x_light = to_light(rows, here);
             samples.relevant.push(x_light);
@@ -386,111 +386,130 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             samples.boundary_world.push(world);
         }
     };
-    // Counted here and added at the end: the counts are the same, without
-    // a loop over every light at every pixel.
-    let mut covered = 0usize;
-    let mut shadowed = [0usize; 32];
-    if classes.one && slots & 1 != 0 {
-        // One light: eight pixels' classes at a time, as bytes of a `u64`
-        // (bit 0 of each byte), so that runs without an active pixel cost
-        // a few instructions per eight pixels; then only the active pixels
-        // are visited, in the same order as the per-pixel loop below.
-        let words = |y: usize| {
-            let (class, near) = (&classes.class8[y * w..][..w], &classes.near8[y * w..][..w]);
-            class.chunks(8).zip(near.chunks(8)).enumerate().map(|(k, (c, n))| {
-                let (c, n) = (le_word(c), le_word(n));
-                let valid = (c | c >> 1) & BYTE_LOW_BITS;
-                let shadow = c & BYTE_LOW_BITS;
-                let mixed = n & n >> 1 & valid;
-                (8 * k, valid, shadow, mixed)
-            })
-        };
-        // Exact capacities first (a fresh `Samples` would otherwise grow
-        // each list a dozen times, copying it each time).
-        let (mut relevant, mut boundary) = (0usize, 0usize);
-        for y in 0..h {
-            for (_, valid, shadow, mixed) in words(y) {
-                covered += byte_sum(valid);
-                shadowed[0] += byte_sum(shadow);
-                relevant += byte_sum(shadow | mixed);
-                boundary += byte_sum(mixed);
-            }
-        }
-        let samples = &mut all[0];
-        samples.relevant.reserve_exact(relevant);
-        samples.relevant_world.reserve_exact(relevant);
-        samples.boundary.reserve_exact(boundary);
-        samples.boundary_world.reserve_exact(boundary);
-        for y in 0..h {
-            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-            let row = m.y_axis * sy;
-            for (x0, _, shadow, mixed) in words(y) {
-                let mut active = shadow | mixed;
-                while active != 0 {
-                    let byte = active.trailing_zeros() / 8;
-                    active &= !(0xff << (8 * byte));
-                    let x = x0 + byte as usize;
-                    let (sx, column) = columns[x];
-                    let (s, b) = ((shadow >> (8 * byte)) as u32 & 1, (mixed >> (8 * byte)) as u32 & 1);
-                    visit(all, (x, y), (sx, sy), row, column, s, b);
+    // The slots `first..first + all.len()` (all of them, or one thread's
+    // share): each light's samples in pixel order, whichever share it is in.
+    let scan = |all: &mut [Samples], first: usize| {
+        // Slots beyond `all` (none from the callers) are ignored.
+        let slots = if all.len() >= 32 { u32::MAX } else { ((1u32 << all.len()) - 1) << first };
+        // Counted here and added at the end: the counts are the same, without
+        // a loop over every light at every pixel.
+        let mut covered = 0usize;
+        let mut shadowed = [0usize; 32];
+        if classes.one && first == 0 && slots & 1 != 0 {
+            // One light: eight pixels' classes at a time, as bytes of a `u64`
+            // (bit 0 of each byte), so that runs without an active pixel cost
+            // a few instructions per eight pixels; then only the active pixels
+            // are visited, in the same order as the per-pixel loop below.
+            let words = |y: usize| {
+                let (class, near) = (&classes.class8[y * w..][..w], &classes.near8[y * w..][..w]);
+                class.chunks(8).zip(near.chunks(8)).enumerate().map(|(k, (c, n))| {
+                    let (c, n) = (le_word(c), le_word(n));
+                    let valid = (c | c >> 1) & BYTE_LOW_BITS;
+                    let shadow = c & BYTE_LOW_BITS;
+                    let mixed = n & n >> 1 & valid;
+                    (8 * k, valid, shadow, mixed)
+                })
+            };
+            // Exact capacities first (a fresh `Samples` would otherwise grow
+            // each list a dozen times, copying it each time).
+            let (mut relevant, mut boundary) = (0usize, 0usize);
+            for y in 0..h {
+                for (_, valid, shadow, mixed) in words(y) {
+                    covered += byte_sum(valid);
+                    shadowed[0] += byte_sum(shadow);
+                    relevant += byte_sum(shadow | mixed);
+                    boundary += byte_sum(mixed);
                 }
             }
-        }
-    } else {
-        // Counts first; for a fresh `Samples` (no capacity yet) also its
-        // lists' exact sizes, as for one light (reused samples have grown
-        // to fit already, and counting every light's relevant pixels costs
-        // a loop over the set bits).
-        let fresh = all
-            .iter()
-            .enumerate()
-            .fold(0u32, |fresh, (k, samples)| fresh | u32::from(samples.relevant.capacity() == 0) << k)
-            & slots;
-        let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
-        for (i, d) in grid.depth.iter().enumerate() {
-            if !d.is_finite() {
-                continue;
-            }
-            let (shadowed_bits, mixed_bits) = classes.at(i);
-            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-            covered += 1;
-            for bit in set_bits(shadowed_bits) {
-                shadowed[bit] += 1;
-            }
-            for bit in set_bits(mixed_bits & fresh) {
-                boundary[bit] += 1;
-                mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
-            }
-        }
-        for bit in set_bits(fresh) {
-            let samples = &mut all[bit];
-            let relevant = shadowed[bit] + mixed_only[bit];
+            let samples = &mut all[0];
             samples.relevant.reserve_exact(relevant);
             samples.relevant_world.reserve_exact(relevant);
-            samples.boundary.reserve_exact(boundary[bit]);
-            samples.boundary_world.reserve_exact(boundary[bit]);
-        }
-        for y in 0..h {
-            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-            let row = m.y_axis * sy;
-            for (x, &(sx, column)) in columns.iter().enumerate() {
-                let i = y * w + x;
-                if !grid.depth[i].is_finite() {
+            samples.boundary.reserve_exact(boundary);
+            samples.boundary_world.reserve_exact(boundary);
+            for y in 0..h {
+                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+                let row = m.y_axis * sy;
+                for (x0, _, shadow, mixed) in words(y) {
+                    let mut active = shadow | mixed;
+                    while active != 0 {
+                        let byte = active.trailing_zeros() / 8;
+                        active &= !(0xff << (8 * byte));
+                        let x = x0 + byte as usize;
+                        let (sx, column) = columns[x];
+                        let (s, b) = ((shadow >> (8 * byte)) as u32 & 1, (mixed >> (8 * byte)) as u32 & 1);
+                        visit(all, 0, (x, y), (sx, sy), row, column, s, b);
+                    }
+                }
+            }
+        } else {
+            // Counts first; for a fresh `Samples` (no capacity yet) also its
+            // lists' exact sizes, as for one light (reused samples have grown
+            // to fit already, and counting every light's relevant pixels costs
+            // a loop over the set bits).
+            let fresh =
+                all.iter().enumerate().fold(0u32, |fresh, (k, samples)| {
+                    fresh | u32::from(samples.relevant.capacity() == 0) << (first + k)
+                }) & slots;
+            let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
+            for (i, d) in grid.depth.iter().enumerate() {
+                if !d.is_finite() {
                     continue;
                 }
                 let (shadowed_bits, mixed_bits) = classes.at(i);
                 let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-                if shadowed_bits | mixed_bits == 0 {
-                    continue;
+                covered += 1;
+                for bit in set_bits(shadowed_bits) {
+                    shadowed[bit] += 1;
                 }
-                visit(all, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
+                for bit in set_bits(mixed_bits & fresh) {
+                    boundary[bit] += 1;
+                    mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
+                }
+            }
+            for bit in set_bits(fresh) {
+                let samples = &mut all[bit - first];
+                let relevant = shadowed[bit] + mixed_only[bit];
+                samples.relevant.reserve_exact(relevant);
+                samples.relevant_world.reserve_exact(relevant);
+                samples.boundary.reserve_exact(boundary[bit]);
+                samples.boundary_world.reserve_exact(boundary[bit]);
+            }
+            for y in 0..h {
+                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+                let row = m.y_axis * sy;
+                for (x, &(sx, column)) in columns.iter().enumerate() {
+                    let i = y * w + x;
+                    if !grid.depth[i].is_finite() {
+                        continue;
+                    }
+                    let (shadowed_bits, mixed_bits) = classes.at(i);
+                    let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+                    if shadowed_bits | mixed_bits == 0 {
+                        continue;
+                    }
+                    visit(all, first, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
+                }
             }
         }
+        for (samples, &shadowed) in all.iter_mut().zip(&shadowed[first..]) {
+            samples.counts.covered += covered;
+            samples.counts.shadowed += shadowed;
+        }
+    };
+    // With rayon, several lights' per-light work (their relevant and
+    // boundary samples) split between threads by light; each share scans
+    // the shared classes itself, so the lists are the same.
+    #[cfg(feature = "rayon")]
+    {
+        let threads = rayon::current_num_threads().min(all.len());
+        if !classes.one && threads > 1 {
+            use rayon::prelude::*;
+            let chunk = all.len().div_ceil(threads);
+            all.par_chunks_mut(chunk).enumerate().for_each(|(c, part)| scan(part, c * chunk));
+            return;
+        }
     }
-    for (samples, &shadowed) in all.iter_mut().zip(&shadowed) {
-        samples.counts.covered += covered;
-        samples.counts.shadowed += shadowed;
-    }
+    scan(all, 0);
 }
 
 /// Bit 0 of every byte of a `u64`.
