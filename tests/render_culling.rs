@@ -6,8 +6,7 @@
 //! (each light's bits are those of its own frame; the experiment's shared
 //! frame relies on it). And work an experiment does not repeat: masks read
 //! from the frame that already wrote them, and a loop's first frame shared
-//! by a second loop at the same view, or taken from a frame that drew the
-//! focused map in layer 0 among others.
+//! by a second loop at the same view.
 
 #![cfg(feature = "render")]
 
@@ -261,59 +260,6 @@ fn a_second_loop_at_the_view_takes_the_first_frame_of_the_first() {
     let before = rendered(&mut shared);
     let settled = loop_of(SearchStrategy::Paper).settle_from(&mut shared, &other, 5, &mut first).unwrap();
     assert_eq!(rendered(&mut shared) - before - 1, settled.frames as u64);
-}
-
-/// The experiment's shared frame: the focused map in layer 0, other maps
-/// after it, with an analysis pass; light 0's part of its readback is the
-/// first frame of a loop at the focused map's view — the loop settles as on
-/// its own renderer, rendering one frame fewer.
-#[test]
-fn a_loop_takes_its_first_frame_from_a_shared_frame() {
-    let Some((device, queue)) = gpu() else { return };
-    let scene = tiny_scene();
-    let camera = walkthrough_camera(96);
-    let lights = [Light::point(DVec3::new(-8.0, 30.0, 12.0))];
-    let view = LoopView { camera: &camera, lights: &lights, bounds: scene.bounds(), map: ShadowMapSize::square(128) };
-    let options = RendererOptions { analysis_size: (48, 48), timestamps: false, ..Default::default() };
-    let mut shared = Renderer::new(&device, &queue, &scene, options).unwrap();
-    let mut alone = Renderer::new(&device, &queue, &scene, options).unwrap();
-    let focused = ShadowProblem::new(camera, lights[0], scene.bounds(), view.map)
-        .and_then(|p| p.solve(&Parameterization::Focused))
-        .unwrap();
-    let mut matrices = vec![focused];
-    matrices.extend(lixel_matrices(&scene, &camera, &Parameterization::LiSpsm(Default::default())));
-    assert!(matrices.len() >= 3);
-    let analysis = Some(AnalysisRequest { lights: None, tag: 9 });
-    let frame = Frame { camera: &camera, lights: &matrices, masks: true, analysis, lookup: ShadowLookup::DepthCompare };
-    let report = shared.render(&frame).unwrap();
-    shared.wait_for(&report.submission).unwrap();
-    let mut readback = loop {
-        if let Some(r) = shared.try_take_analysis() {
-            break r;
-        }
-        shared.wait_idle().unwrap();
-    };
-    assert_eq!((readback.tag, readback.lights.len()), (9, matrices.len()));
-    // Light 0's part: its matrix and bit 0.
-    readback.lights.truncate(1);
-    for word in readback.masks.shadow.iter_mut().chain(readback.masks.facing.iter_mut()) {
-        *word &= 1;
-    }
-    let mut first = FirstFrame::default();
-    first.keep_readback(&view, ShadowLookup::DepthCompare, readback);
-    let rendered = |r: &mut Renderer| r.render(&Frame::new(&camera, &[])).unwrap().frame;
-    let (before_shared, before_alone) = (rendered(&mut shared), rendered(&mut alone));
-    let loop_of = || {
-        let optimize = OptimizeOptions { strategy: SearchStrategy::Paper, ..Default::default() };
-        ShadowLoop::new(LoopPolicy::Optimized, 1, LoopOptions { optimize, ..Default::default() }).unwrap()
-    };
-    let (mut a, mut b) = (loop_of(), loop_of());
-    let kept = a.settle_from(&mut shared, &view, 5, &mut first).unwrap();
-    let own = b.settle(&mut alone, &view, 5).unwrap();
-    assert_eq!(kept, own);
-    assert_eq!(a.frames(), b.frames(), "the taken frame counts");
-    let drawn = (rendered(&mut shared) - before_shared - 1, rendered(&mut alone) - before_alone - 1);
-    assert_eq!(drawn.0 + 1, drawn.1, "the loop takes the shared frame's readback");
 }
 
 /// A frame of `matrix` alone that writes its masks.
