@@ -19,8 +19,8 @@
 use std::time::Instant;
 
 use crate::mesh::ShadowMasks;
-use crate::render::{AnalysisReadback, AnalysisRequest, Frame, LoopView, ShadowLookup, MAX_LIGHTS};
-use crate::{Light, LightMatrix};
+use crate::render::{Frame, ShadowLookup, MAX_LIGHTS};
+use crate::LightMatrix;
 
 use super::{Coverage, ExperimentError, MethodResult, MethodSpec, RunStage, Runner};
 
@@ -46,19 +46,10 @@ impl Runner<'_> {
     /// it lets a map already in layer 0 be kept
     /// ([`RendererOptions::reuse_maps`](crate::render::RendererOptions::reuse_maps)).
     /// Returns the end of the last stage lap.
-    ///
-    /// With `loop_light` (an optimized loop at this light and the standard
-    /// lookup comes next) and the focused method among `pending`, the frame
-    /// also draws an analysis pass, and light 0's part of its readback is
-    /// kept as that loop's first frame ([`FirstFrame::keep_readback`](crate::render::FirstFrame::keep_readback)):
-    /// the loop starts from the focused matrix, whose map, camera masks and
-    /// analysis bits this frame already has in layer and bit 0.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn finish_shared(
         &mut self,
         mut pending: Vec<Pending>,
         first: Option<usize>,
-        loop_light: Option<Light>,
         results: &mut [(MethodSpec, MethodResult)],
         truth: &ShadowMasks,
         coverage: Option<&Coverage>,
@@ -75,11 +66,7 @@ impl Runner<'_> {
         if matrices.len() != pending.len() {
             return Err(ExperimentError::Config("a method solved without a matrix".into()));
         }
-        let focused_first = first.is_some_and(|_| pending[0].method.matrix() == crate::Method::Focused);
-        let masks = match loop_light.filter(|_| focused_first) {
-            Some(light) => self.masks_and_first_frame(&matrices, light)?,
-            None => self.masks_of_many(&matrices)?,
-        };
+        let masks = self.masks_of_many(&matrices)?;
         let mut lap = self.stages.lap(RunStage::Lookups, lap);
         for (p, masks) in pending.into_iter().zip(&masks) {
             let result = self.method_result(p.method, p.matrices, p.frames, p.note, masks, truth, coverage)?;
@@ -110,60 +97,6 @@ impl Runner<'_> {
         }
         Ok(out)
     }
-}
-
-impl Runner<'_> {
-    /// [`masks_of_many`](Self::masks_of_many) whose first frame also draws
-    /// an analysis pass; light 0's part of its readback (`matrices[0]` must
-    /// be `light`'s focused matrix at the configuration's map size) becomes
-    /// the next loop's first frame at `light`.
-    fn masks_and_first_frame(
-        &mut self,
-        matrices: &[LightMatrix],
-        light: Light,
-    ) -> Result<Vec<ShadowMasks>, ExperimentError> {
-        let lights = &matrices[..matrices.len().min(MAX_LIGHTS)];
-        self.renderer.set_cascades(0, None);
-        // Nothing older may be waiting: the loop takes the next readback.
-        self.renderer.discard_analyses();
-        const TAG: u32 = u32::MAX;
-        let analysis = Some(AnalysisRequest { lights: None, tag: TAG });
-        let frame = Frame { camera: &self.camera, lights, masks: true, analysis, lookup: ShadowLookup::DepthCompare };
-        let report = self.renderer.render(&frame)?;
-        self.renderer.wait_for(&report.submission)?;
-        let shared = self.renderer.read_masks()?;
-        let readback = loop {
-            if let Some(r) = self.renderer.try_take_analysis() {
-                break r;
-            }
-            self.renderer.wait_idle()?;
-        };
-        if readback.tag == TAG && readback.lights.as_slice() == lights {
-            let problem = self.problem(light, self.config.single_map())?;
-            let view = LoopView {
-                camera: problem.camera(),
-                lights: std::slice::from_ref(problem.light()),
-                bounds: *problem.bounds(),
-                map: problem.map_size(),
-            };
-            self.first_frame.keep_readback(&view, ShadowLookup::DepthCompare, light_zero(readback));
-        }
-        let mut out: Vec<ShadowMasks> = (0..lights.len()).map(|bit| light_masks(&shared, bit)).collect();
-        if matrices.len() > lights.len() {
-            out.extend(self.masks_of_many(&matrices[lights.len()..])?);
-        }
-        Ok(out)
-    }
-}
-
-/// An analysis readback of several lights cut to light 0's: its matrix
-/// and its bits (bit 0) alone.
-fn light_zero(mut readback: AnalysisReadback) -> AnalysisReadback {
-    readback.lights.truncate(1);
-    for word in readback.masks.shadow.iter_mut().chain(readback.masks.facing.iter_mut()) {
-        *word &= 1;
-    }
-    readback
 }
 
 /// Light `bit`'s masks moved to bit 0, the other bits clear: what a frame

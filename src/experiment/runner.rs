@@ -103,10 +103,9 @@ pub struct Runner<'a> {
     pub(super) camera: Camera,
     pub(super) renderer: Renderer,
     pub(super) stages: RunStages,
-    /// The last optimized loop's first frame (or the shared frame's, see
-    /// `batch.rs`): the next loop at the same configuration (another search)
-    /// starts from it instead of rendering it.
-    pub(super) first_frame: FirstFrame,
+    /// The last optimized loop's first frame: the next loop at the same
+    /// configuration (another search) starts from it instead of rendering it.
+    first_frame: FirstFrame,
 }
 
 impl std::fmt::Debug for Runner<'_> {
@@ -410,11 +409,7 @@ impl<'a> Runner<'a> {
             if method.parameterization(nearest).is_none() && !shared.is_empty() {
                 let focused = shared.iter().position(|p: &batch::Pending| p.method.matrix() == crate::Method::Focused);
                 let pending = std::mem::take(&mut shared);
-                // The optimized loop (standard lookup) starts from the
-                // focused map this frame draws: its first frame comes along.
-                let loop_light =
-                    (method.cascade().is_none() && method.lookup() == ShadowLookup::DepthCompare).then_some(light);
-                lap = self.finish_shared(pending, focused, loop_light, &mut results, &truth, coverage.as_ref(), lap)?;
+                lap = self.finish_shared(pending, focused, &mut results, &truth, coverage.as_ref(), lap)?;
             }
             let solved = self.solve_method(method, light, self.config.single_map(), nearest);
             lap = self.stages.lap(RunStage::Matrices, lap);
@@ -446,7 +441,7 @@ impl<'a> Runner<'a> {
         // The last method solved first: its loop's last frame drew its map
         // into layer 0.
         let last = shared.len().checked_sub(1);
-        self.finish_shared(shared, last, None, &mut results, &truth, coverage.as_ref(), lap)?;
+        self.finish_shared(shared, last, &mut results, &truth, coverage.as_ref(), lap)?;
         Ok(ConfigOutcome { light, results, truth_disagreement, elapsed: start.elapsed() })
     }
 

@@ -189,17 +189,6 @@ impl FirstFrame {
             .map(|k| &k.readback)
     }
 
-    /// Keeps `readback` as the first frame of the next loop at `view` in
-    /// `lookup`: it must be what that loop's first frame would read back on
-    /// the same renderer — an analysis pass in `lookup` with `view`'s lights
-    /// in their focused matrices ([`AnalysisReadback::lights`]), its shadow
-    /// and facing bits those of a frame with these lights alone (say, light
-    /// 0's bits of a frame that drew other maps in the layers after). A loop
-    /// whose first matrices are not `readback.lights` does not take it.
-    pub fn keep_readback(&mut self, view: &LoopView<'_>, lookup: ShadowLookup, readback: AnalysisReadback) {
-        self.keep(view, lookup, readback);
-    }
-
     /// Keeps `readback` as the first frame at `view` in `lookup`.
     fn keep(&mut self, view: &LoopView<'_>, lookup: ShadowLookup, readback: AnalysisReadback) {
         self.kept =
