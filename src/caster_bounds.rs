@@ -7,8 +7,12 @@
 //! extremes of a few functions over it. [`CasterBounds`] keeps the box and
 //! the planes and answers those extremes directly:
 //! - linear functions (the projective `w`, a directional light's `d·x`):
-//!   their exact minimum and maximum, as two small linear programs
-//!   ([`crate::geometry::maximize_in_box`]);
+//!   their exact minimum as a small linear program
+//!   ([`crate::geometry::maximize_in_box`]); their maximum either by a second
+//!   program or, where the caller knows it, as the largest value over the
+//!   focus vertices and the light (the body lies in their hull, where a
+//!   linear function peaks at one of them; a directional light's function
+//!   must not grow towards the light for that);
 //! - a positional light's distance `|x - l|`: its maximum over the body is
 //!   at most the farthest focus vertex (the body lies in `conv(F ∪ l)`, and
 //!   a convex function peaks at a vertex, `l` itself being at distance 0);
@@ -181,12 +185,27 @@ impl CasterBounds {
     /// `(min, max)` of `h·[x, 1]` over the body, widened, and a point of
     /// the body where the minimum is reached; `None` when there are no
     /// casters.
-    pub(crate) fn linear_range(&self, h: DVec4) -> Option<(f64, f64, DVec3)> {
+    ///
+    /// `hull_max`, when the caller has it, is the function's largest value
+    /// over the focus vertices and the light (a positional light), or over
+    /// the focus vertices alone (a directional light whose function does not
+    /// grow towards the light): the body lies in their hull (`conv(F ∪ l)`,
+    /// or `F` extruded towards the light), where a linear function peaks at
+    /// one of them. The maximum is then that value, or the box's corner where
+    /// that is lower, widened, and only the minimum is solved for.
+    pub(crate) fn linear_range(&self, h: DVec4, hull_max: Option<f64>) -> Option<(f64, f64, DVec3)> {
         let c = h.truncate();
-        let hi = self.argmax(c)?;
-        let lo = self.argmax(-c)?;
         let widen = self.widening(c);
-        Some((c.dot(lo) + h.w - widen, c.dot(hi) + h.w + widen, lo))
+        let hi = match hull_max {
+            Some(top) => {
+                let (min, max) = self.region?;
+                let corner = DVec3::select(c.cmpge(DVec3::ZERO), max, min);
+                (c.dot(corner) + h.w).min(top) + widen
+            }
+            None => c.dot(self.argmax(c)?) + h.w + widen,
+        };
+        let lo = self.argmax(-c)?;
+        Some((c.dot(lo) + h.w - widen, hi, lo))
     }
 
     /// `(min, max)` bounds of `|x - light|` over the body, widened, from

@@ -401,12 +401,28 @@ impl Placement<'_> {
             LightFrame::Perspective { .. } => w_row,
             LightFrame::Orthographic { rotation } => rotation.row(2).extend(0.0),
         };
-        let casters = self.casters.and_then(|c| c.linear_range(depth_function));
+        // The depth points' range of it. They hold the casters' focus
+        // vertices, so (with the light's own value for a positional light)
+        // they bound the casters' maximum (`CasterBounds::linear_range`),
+        // except where a directional light's function grows towards the
+        // light (then the casters' maximum is solved for).
+        let depth_points = match self.frame {
+            LightFrame::Perspective { .. } => fold_range(all_depth().map(|&p| w_row.dot(p.extend(1.0)))),
+            LightFrame::Orthographic { rotation } => fold_range(all_depth().map(|p| rotation.row(2).dot(*p))),
+        };
+        let hull_max = depth_points.and_then(|(_, top)| match (self.frame, self.light) {
+            (LightFrame::Perspective { position, .. }, _) => Some(top.max(w_row.dot(position.extend(1.0)))),
+            (LightFrame::Orthographic { rotation }, Light::Directional { direction }) => {
+                (rotation.row(2).dot(direction) >= 0.0).then_some(top)
+            }
+            _ => None,
+        });
+        let casters = self.casters.and_then(|c| c.linear_range(depth_function, hull_max));
         let caster_depth = casters.map(|(lo, hi, _)| (lo, hi));
         let mut needs_unclipped_depth = false;
         let (z_row, depth) = match self.frame {
             LightFrame::Perspective { .. } => {
-                let points = fold_range(all_depth().map(|&p| w_row.dot(p.extend(1.0))));
+                let points = depth_points;
                 // `w` is positive in front of the light: the range starts at 0.
                 let (lo, hi) = union(points, caster_depth).map_or((f64::INFINITY, 0.0), |(lo, hi)| (lo, hi.max(0.0)));
                 let far = hi * (1.0 + pad);
@@ -421,7 +437,7 @@ impl Placement<'_> {
             }
             LightFrame::Orthographic { rotation } => {
                 let d = rotation.row(2);
-                let points = fold_range(all_depth().map(|p| d.dot(*p)));
+                let points = depth_points;
                 let (lo, hi) = union(points, caster_depth).unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
                 let span = (hi - lo)
                     .max(f64::MIN_POSITIVE.sqrt())

@@ -72,7 +72,7 @@ impl Side {
 
     /// Whether an edge between the two sides crosses the plane strictly.
     fn is_opposite(self, other: Side) -> bool {
-        matches!((self, other), (Side::Inside, Side::Outside) | (Side::Outside, Side::Inside))
+        self as u8 | other as u8 == Side::Inside as u8 | Side::Outside as u8
     }
 }
 

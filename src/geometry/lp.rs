@@ -86,14 +86,17 @@ impl Region<'_> {
         // of `origin` (the centre's projection): a square of that half-side
         // holds them all and bounds the problem.
         let half = 0.5 * (self.max - self.min).length() + tol;
+        // Each with its normal's length, taken once here rather than once
+        // per line it bounds.
         let restricted = |k: usize| {
             let (a, b) = self.constraint(k);
-            (DVec2::new(a.dot(e1), a.dot(e2)), b - a.dot(origin))
+            let normal = DVec2::new(a.dot(e1), a.dot(e2));
+            (normal, b - a.dot(origin), normal.length())
         };
         let goal = DVec2::new(c.dot(e1), c.dot(e2));
         let count = 6 + i;
         let y = if count <= MAX_RESTRICTED {
-            let mut kept = [(DVec2::ZERO, 0.0); MAX_RESTRICTED];
+            let mut kept = [(DVec2::ZERO, 0.0, 0.0); MAX_RESTRICTED];
             for (k, slot) in kept[..count].iter_mut().enumerate() {
                 *slot = restricted(k);
             }
@@ -106,47 +109,48 @@ impl Region<'_> {
 }
 
 /// The largest `goal·y` over the square `|y| <= half` and the half-planes
-/// `constraint(k)` (`a·y <= b`) for `k < count`.
+/// `constraint(k) = (a, b, |a|)` (`a·y <= b`) for `k < count`.
 fn maximize_in_square(
     count: usize,
-    constraint: impl Fn(usize) -> (DVec2, f64),
+    constraint: impl Fn(usize) -> (DVec2, f64, f64),
     half: f64,
     goal: DVec2,
     tol: f64,
 ) -> Option<DVec2> {
     let mut y = DVec2::select(goal.cmpge(DVec2::ZERO), DVec2::splat(half), DVec2::splat(-half));
     for k in 0..count {
-        let (a, b) = constraint(k);
+        let (a, b, length) = constraint(k);
         if a.dot(y) > b + tol {
-            y = maximize_on_line(a, b, (0..k).map(&constraint), half, goal, tol)?;
+            y = maximize_on_line(a, b, length, (0..k).map(&constraint), half, goal, tol)?;
         }
     }
     Some(y)
 }
 
-/// The optimum of `goal·y` on the line `a·y = b` inside the square
-/// `|y| <= half` and the half-planes `earlier` (`a·y <= b` each).
+/// The optimum of `goal·y` on the line `a·y = b` (`length = |a|`) inside
+/// the square `|y| <= half` and the half-planes `earlier` (`(g, h, |g|)`:
+/// `g·y <= h` each).
 fn maximize_on_line(
     a: DVec2,
     b: f64,
-    earlier: impl Iterator<Item = (DVec2, f64)>,
+    length: f64,
+    earlier: impl Iterator<Item = (DVec2, f64, f64)>,
     half: f64,
     goal: DVec2,
     tol: f64,
 ) -> Option<DVec2> {
-    let length = a.length();
     if !(length > PARALLEL) {
         // Parallel to the plane and violated by more than `tol`.
         return None;
     }
     let along = a.perp() / length;
     let foot = a * (b / (length * length));
-    let square = [(DVec2::X, half), (DVec2::NEG_X, half), (DVec2::Y, half), (DVec2::NEG_Y, half)];
+    let square = [(DVec2::X, half, 1.0), (DVec2::NEG_X, half, 1.0), (DVec2::Y, half, 1.0), (DVec2::NEG_Y, half, 1.0)];
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-    for (g, h) in square.into_iter().chain(earlier) {
+    for (g, h, g_length) in square.into_iter().chain(earlier) {
         let slope = g.dot(along);
         let room = h - g.dot(foot);
-        if slope.abs() <= PARALLEL * g.length() {
+        if slope.abs() <= PARALLEL * g_length {
             if room < -tol {
                 return None;
             }
