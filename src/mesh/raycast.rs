@@ -3,9 +3,10 @@
 //! the renderer draws them (the ground truth of the shadow experiments).
 //!
 //! # Algorithm
-//! The BVH splits triangle centroids at the median of the longest axis of
-//! their bounds (build `O(n log n)`, leaves of at most [`LEAF_SIZE`]
-//! triangles); queries use slab tests against node boxes and Möller–Trumbore
+//! The BVH splits each node's triangles where the surface-area heuristic
+//! over 16 centroid bins per axis is least (below depth 32 it splits at the
+//! centroid median of the longest axis, which bounds the depth; build
+//! `O(n log n)`, leaves of at most [`LEAF_SIZE`] triangles); queries use slab tests against node boxes and Möller–Trumbore
 //! against triangles (`O(log n)` typical). Rays are traced in parallel with
 //! rayon.
 
@@ -18,6 +19,29 @@ use crate::{Camera, Light};
 
 /// Most triangles per BVH leaf.
 pub const LEAF_SIZE: usize = 4;
+
+/// Centroid bins per axis of the surface-area split.
+const SAH_BINS: usize = 16;
+
+/// Nodes at this depth or deeper (the root is at 0) split at the centroid
+/// median instead of by surface area, which bounds the tree's depth: a
+/// median split of `n <= 2^32` triangles reaches leaves of [`LEAF_SIZE`]
+/// within 30 levels, so no leaf is deeper than `SAH_DEPTH + 30 = 62` and the
+/// traversal's stack (one entry per level plus one) never holds more than 63
+/// of its 64 entries.
+const SAH_DEPTH: usize = 32;
+
+/// A triangle while the BVH is built.
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    /// Index of the triangle in the mesh.
+    index: u32,
+    triangle: Triangle,
+    centroid: Vec3,
+    /// The triangle's box.
+    min: Vec3,
+    max: Vec3,
+}
 
 /// A ray `origin + t direction`, `t >= 0`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,54 +98,70 @@ impl Bvh {
     /// ([`Mesh::validate`]); out-of-range indices are skipped.
     #[must_use]
     pub fn new(mesh: &Mesh) -> Self {
-        let mut items: Vec<(u32, Triangle, Vec3)> = mesh
+        Self::build(mesh, SAH_DEPTH)
+    }
+
+    /// [`new`](Self::new) with the surface-area split above depth
+    /// `sah_depth` and the median split from there on (no leaf deeper than
+    /// `sah_depth + 30`).
+    fn build(mesh: &Mesh, sah_depth: usize) -> Self {
+        let mut items: Vec<Item> = mesh
             .indices
             .chunks_exact(3)
             .enumerate()
             .filter_map(|(k, tri)| {
                 let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| mesh.positions.get(i as usize).copied());
                 let (a, b, c) = (a?, b?, c?);
-                Some((k as u32, Triangle { v0: a, e1: b - a, e2: c - a }, (a + b + c) / 3.0))
+                let triangle = Triangle { v0: a, e1: b - a, e2: c - a };
+                // The box of the corners as the traversal's triangle test
+                // sees them (`v0 + e1`, `v0 + e2`).
+                let corners = [triangle.v0, triangle.v0 + triangle.e1, triangle.v0 + triangle.e2];
+                let min = corners[0].min(corners[1]).min(corners[2]);
+                let max = corners[0].max(corners[1]).max(corners[2]);
+                Some(Item { index: k as u32, triangle, centroid: (a + b + c) / 3.0, min, max })
             })
             .collect();
         let mut nodes = Vec::with_capacity(2 * items.len() / LEAF_SIZE + 1);
         nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
-        // Explicit stack of (node, range) to build without recursion.
-        let mut stack = vec![(0usize, 0usize, items.len())];
-        while let Some((node, start, end)) = stack.pop() {
+        // Explicit stack of (node, range, depth) to build without recursion.
+        let mut stack = vec![(0usize, 0usize, items.len(), 0usize)];
+        while let Some((node, start, end, depth)) = stack.pop() {
             let slice = &mut items[start..end];
             let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
             let (mut cmin, mut cmax) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-            for (_, t, c) in slice.iter() {
-                for v in [t.v0, t.v0 + t.e1, t.v0 + t.e2] {
-                    min = min.min(v);
-                    max = max.max(v);
-                }
-                cmin = cmin.min(*c);
-                cmax = cmax.max(*c);
+            for item in slice.iter() {
+                min = min.min(item.min);
+                max = max.max(item.max);
+                cmin = cmin.min(item.centroid);
+                cmax = cmax.max(item.centroid);
             }
             let extent = cmax - cmin;
             if slice.len() <= LEAF_SIZE || extent.max_element() <= 0.0 {
                 nodes[node] = Node { min, max, first: start as u32, count: slice.len() as u32 };
                 continue;
             }
-            let axis = extent.max_position();
-            let mid = slice.len() / 2;
-            slice.select_nth_unstable_by(mid, |a, b| a.2[axis].total_cmp(&b.2[axis]));
+            let mid = if depth < sah_depth {
+                sah_partition(slice, cmin, extent)
+            } else {
+                let axis = extent.max_position();
+                let mid = slice.len() / 2;
+                slice.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+                mid
+            };
             let left = nodes.len();
             nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
             nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, first: 0, count: 0 });
             nodes[node] = Node { min, max, first: left as u32, count: 0 };
-            stack.push((left, start, start + mid));
-            stack.push((left + 1, start + mid, end));
+            stack.push((left, start, start + mid, depth + 1));
+            stack.push((left + 1, start + mid, end, depth + 1));
         }
         if items.is_empty() {
             nodes[0] = Node { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY, first: 0, count: 0 };
         }
         Self {
             nodes,
-            order: items.iter().map(|(k, _, _)| *k).collect(),
-            triangles: items.into_iter().map(|(_, t, _)| t).collect(),
+            order: items.iter().map(|item| item.index).collect(),
+            triangles: items.into_iter().map(|item| item.triangle).collect(),
         }
     }
 
@@ -184,9 +224,10 @@ impl Bvh {
             return;
         }
         // Each entry: a node and the limit it passed its box test with. The
-        // build splits every range at its median, so the tree is at most
-        // ⌈log2 n⌉ + 1 ≤ 33 levels deep (`u32` indices), and a depth-first
-        // walk holds at most one entry per level plus one: 64 never fills.
+        // build's depth bound (see `SAH_DEPTH`: no leaf deeper than 62) and
+        // a depth-first walk's one entry per level plus one keep this at
+        // most 63 full; an overflow would panic at the index, never drop
+        // a node.
         let mut stack = [(0u32, t_max); 64];
         let mut top = 1;
         while top > 0 {
@@ -211,11 +252,8 @@ impl Bvh {
             let dr = slab(ray.origin, inv, self.nodes[r].min, self.nodes[r].max, t_max);
             // Push the farther child first so the nearer one is visited next.
             let mut push = |i: usize| {
-                debug_assert!(top < stack.len(), "BVH deeper than its median build allows");
-                if top < stack.len() {
-                    stack[top] = (i as u32, t_max);
-                    top += 1;
-                }
+                stack[top] = (i as u32, t_max);
+                top += 1;
             };
             match (dl, dr) {
                 (Some(a), Some(b)) if a <= b => {
@@ -232,6 +270,80 @@ impl Bvh {
             }
         }
     }
+}
+
+/// Half the surface area of a box.
+fn half_area(min: Vec3, max: Vec3) -> f32 {
+    let d = (max - min).max(Vec3::ZERO);
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// Splits `items` (at least two, centroids spanning `extent > 0` from
+/// `cmin` on some axis) where the surface-area heuristic is least: the
+/// centroids are binned into [`SAH_BINS`] equal slabs per axis and every
+/// boundary between bins is costed as `area(left) * count(left) +
+/// area(right) * count(right)`; the first least cost (axes x, y, z, then
+/// boundaries in order) wins, so the build is deterministic. Moves the left
+/// side to the front and returns its length, which is never 0 or
+/// `items.len()` (the extreme centroids of an axis with extent fall in its
+/// first and last bins).
+fn sah_partition(items: &mut [Item], cmin: Vec3, extent: Vec3) -> usize {
+    let bin_of = |c: f32, axis: usize| -> usize {
+        let scale = SAH_BINS as f32 / extent[axis];
+        (((c - cmin[axis]) * scale) as usize).min(SAH_BINS - 1)
+    };
+    let mut best: Option<(f32, usize, usize)> = None;
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        let mut counts = [0usize; SAH_BINS];
+        let mut bmin = [Vec3::INFINITY; SAH_BINS];
+        let mut bmax = [Vec3::NEG_INFINITY; SAH_BINS];
+        for item in items.iter() {
+            let b = bin_of(item.centroid[axis], axis);
+            counts[b] += 1;
+            bmin[b] = bmin[b].min(item.min);
+            bmax[b] = bmax[b].max(item.max);
+        }
+        // Sweep from the right: cost of the right side of each boundary.
+        let mut right_cost = [0.0f32; SAH_BINS];
+        let (mut rmin, mut rmax, mut rcount) = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize);
+        for b in (1..SAH_BINS).rev() {
+            rmin = rmin.min(bmin[b]);
+            rmax = rmax.max(bmax[b]);
+            rcount += counts[b];
+            right_cost[b] = if rcount == 0 { 0.0 } else { half_area(rmin, rmax) * rcount as f32 };
+        }
+        let (mut lmin, mut lmax, mut lcount) = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize);
+        for b in 1..SAH_BINS {
+            lmin = lmin.min(bmin[b - 1]);
+            lmax = lmax.max(bmax[b - 1]);
+            lcount += counts[b - 1];
+            if lcount == 0 || lcount == items.len() {
+                continue;
+            }
+            let cost = half_area(lmin, lmax) * lcount as f32 + right_cost[b];
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b));
+            }
+        }
+    }
+    let Some((_, axis, boundary)) = best else {
+        // Unreachable for a valid extent; split in half rather than fail.
+        return items.len() / 2;
+    };
+    // In-place partition: bins below `boundary` to the front.
+    let (mut i, mut j) = (0, items.len());
+    while i < j {
+        if bin_of(items[i].centroid[axis], axis) < boundary {
+            i += 1;
+        } else {
+            j -= 1;
+            items.swap(i, j);
+        }
+    }
+    i
 }
 
 /// Entry distance of the ray into a box, if it enters before `t_max`.
@@ -494,5 +606,60 @@ mod tests {
             }
         }
         assert!(hits > 100);
+    }
+
+    /// Depth of the deepest leaf (the root at 0) and the triangles in leaves.
+    fn depth_and_count(bvh: &Bvh) -> (usize, usize) {
+        let (mut deepest, mut count) = (0, 0);
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((i, d)) = stack.pop() {
+            let node = &bvh.nodes[i];
+            if node.count > 0 {
+                deepest = deepest.max(d);
+                count += node.count as usize;
+            } else {
+                stack.push((node.first as usize, d + 1));
+                stack.push((node.first as usize + 1, d + 1));
+            }
+        }
+        (deepest, count)
+    }
+
+    /// Triangles at geometrically growing distances make the surface-area
+    /// split peel a few off per level (28 levels for these 120 with the
+    /// default switch depth); the median fallback caps the depth within what
+    /// the traversal's stack holds (checked with an early switch too), and
+    /// every triangle is still found.
+    #[test]
+    fn a_skewed_mesh_stays_within_the_stack() {
+        let mut mesh = Mesh::default();
+        for i in 0..120u32 {
+            let x = 2.0f32.powi(i as i32);
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend([Vec3::new(x, 0.0, 0.0), Vec3::new(x, 1.0, 0.0), Vec3::new(x, 0.0, 1.0)]);
+            mesh.normals.extend([Vec3::X; 3]);
+            mesh.indices.extend([base, base + 1, base + 2]);
+        }
+        for sah_depth in [SAH_DEPTH, 8] {
+            let bvh = Bvh::build(&mesh, sah_depth);
+            let (deepest, count) = depth_and_count(&bvh);
+            assert_eq!(count, 120);
+            assert!(deepest <= sah_depth + 30, "{deepest}");
+            // The surface-area split peels a few triangles off per level.
+            assert!(deepest > 8, "{deepest}");
+            assert_hits_each(&bvh);
+        }
+    }
+
+    fn assert_hits_each(bvh: &Bvh) {
+        for i in 0..120u32 {
+            let x = 2.0f32.powi(i as i32);
+            // Between the previous triangle (at x / 2) and this one.
+            let ray = Ray { origin: Vec3::new(0.99 * x, 0.25, 0.25), direction: Vec3::X };
+            let hit = bvh.closest_hit(&ray, f32::INFINITY).expect("every triangle is hit");
+            assert_eq!(hit.triangle, i);
+            assert!(bvh.occluded(&ray, 0.02 * x));
+            assert!(!bvh.occluded(&ray, 0.005 * x));
+        }
     }
 }

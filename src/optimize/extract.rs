@@ -123,6 +123,13 @@ impl Grid {
         self.bits.clear();
         self.normals.clear();
         self.has_normals = readback.normals.is_some();
+        // Filled row by row: sized once (a fresh workspace would otherwise
+        // grow each buffer a dozen times, copying it each time).
+        self.depth.reserve_exact(w * h);
+        self.bits.reserve_exact(w * h);
+        if self.has_normals {
+            self.normals.reserve_exact(w * h);
+        }
         // Row by row over exact-size slices (a flat_map over rows was half
         // the cost of a one-light extraction).
         for y in 0..h {
@@ -173,8 +180,18 @@ fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
     tmp.clear();
     tmp.resize(src.len(), T::default());
     for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
-        for x in 0..w {
-            t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
+        if w < 3 {
+            for x in 0..w {
+                t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
+            }
+            continue;
+        }
+        // The edges clamped, the interior as three shifted slices (no
+        // index arithmetic per pixel, so it vectorizes).
+        t[0] = s[0] | s[1];
+        t[w - 1] = s[w - 2] | s[w - 1];
+        for (((t, &l), &c), &r) in t[1..w - 1].iter_mut().zip(&s[..w - 2]).zip(&s[1..w - 1]).zip(&s[2..]) {
+            *t = l | c | r;
         }
     }
     dst.clear();
@@ -182,8 +199,8 @@ fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
     for y in 0..h {
         let (above, here, below) =
             (&tmp[y.saturating_sub(1) * w..][..w], &tmp[y * w..][..w], &tmp[(y + 1).min(h - 1) * w..][..w]);
-        for (x, cell) in dst[y * w..][..w].iter_mut().enumerate() {
-            *cell = above[x] | here[x] | below[x];
+        for (((cell, &a), &m), &b) in dst[y * w..][..w].iter_mut().zip(above).zip(here).zip(below) {
+            *cell = a | m | b;
         }
     }
 }
@@ -306,90 +323,229 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     }
     let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
     classes.fill(grid, bits);
-    // Slots beyond `all` (none from the callers) are ignored.
-    let slots = if all.len() >= 32 { u32::MAX } else { (1u32 << all.len()) - 1 };
-    // Counted here and added at the end: the counts are the same, without
-    // a loop over every light at every pixel.
-    let mut covered = 0usize;
-    let mut shadowed = [0usize; 32];
-    for y in 0..h {
-        let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-        let row = m.y_axis * sy;
-        for (x, &(sx, column)) in columns.iter().enumerate() {
-            let i = y * w + x;
-            if !grid.depth[i].is_finite() {
-                continue;
-            }
-            let (shadowed_bits, mixed_bits) = classes.at(i);
-            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-            covered += 1;
-            for bit in set_bits(shadowed_bits) {
-                shadowed[bit] += 1;
-            }
-            let active = shadowed_bits | mixed_bits;
-            if active == 0 {
-                continue;
-            }
-            let d = grid.depth[i];
-            let here = unproject(column, row, d);
-            if !(here.w > 0.0) || !here.is_finite() {
-                for bit in set_bits(active) {
-                    all[bit].counts.rejected_invalid += 1;
-                }
-                continue;
-            }
-            let world = here.truncate() / here.w;
-            // Light-independent surface derivatives, computed on first use.
-            let mut surface: Option<Option<Surface>> = None;
+    let classes = &*classes;
+    // The camera's side of every surface (`Camera::towards_viewer`, with
+    // the eye made once rather than per boundary pixel: the same bits).
+    let viewer =
+        if camera.is_orthographic() { Viewer::Direction(-camera.view_direction()) } else { Viewer::Eye(camera.eye()) };
+    // The work at one covered pixel with an active slot (shadowed or at a
+    // shadow boundary), in pixel order: its relevant samples, and its
+    // boundary samples for the slots in `mixed_bits`.
+    let visit = |all: &mut [Samples],
+                 first: usize,
+                 (x, y): (usize, usize),
+                 (sx, sy): (f64, f64),
+                 row: DVec4,
+                 column: DVec4,
+                 shadowed_bits: u32,
+                 mixed_bits: u32| {
+        let i = y * w + x;
+        let active = shadowed_bits | mixed_bits;
+        let d = grid.depth[i];
+        let here = unproject(column, row, d);
+        if !(here.w > 0.0) || !here.is_finite() {
             for bit in set_bits(active) {
-                let samples = &mut all[bit];
-                let rows = &rows[bit];
-                let x_light = to_light(rows, here);
-                samples.relevant.push(x_light);
-                samples.relevant_world.push(world);
-                if mixed_bits >> bit & 1 == 0 {
+                all[bit].counts.rejected_invalid += 1;
+            }
+            return;
+        }
+        let world = here.truncate() / here.w;
+        // Light-independent surface derivatives, computed on first use.
+        let mut surface: Option<Option<Surface>> = None;
+        for bit in set_bits(active) {
+            let samples = &mut all[bit - first];
+            let rows = &rows[bit];
+            let x_light = to_light(rows, here);
+            samples.relevant.push(x_light);
+            samples.relevant_world.push(world);
+            if mixed_bits >> bit & 1 == 0 {
+                continue;
+            }
+            samples.counts.boundary_candidates += 1;
+            let found = *surface.get_or_insert_with(|| {
+                surface_at(grid, &world_from_screen, viewer, options, (x, y), (sx, sy, d), here, world, step, &depth_at)
+            });
+            let Some(found) = found else {
+                samples.counts.rejected_discontinuity += 1;
+                continue;
+            };
+            let sample = match found {
+                Surface::Given { tx, ty, .. } => {
+                    let along = |t: DVec3| to_light(rows, t.extend(0.0));
+                    BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+                }
+                Surface::Depth { dx4, dy4, .. } => {
+                    BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
+                }
+            };
+            if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
+                samples.counts.rejected_back_facing += 1;
+                continue;
+            }
+            samples.boundary.push(sample);
+            samples.boundary_world.push(world);
+        }
+    };
+    // The slots `first..first + all.len()` (all of them, or one thread's
+    // share): each light's samples in pixel order, whichever share it is in.
+    let scan = |all: &mut [Samples], first: usize| {
+        // Slots beyond `all` (none from the callers) are ignored.
+        let slots = if all.len() >= 32 { u32::MAX } else { ((1u32 << all.len()) - 1) << first };
+        // Counted here and added at the end: the counts are the same, without
+        // a loop over every light at every pixel.
+        let mut covered = 0usize;
+        let mut shadowed = [0usize; 32];
+        if classes.one && first == 0 && slots & 1 != 0 {
+            // One light: eight pixels' classes at a time, as bytes of a `u64`
+            // (bit 0 of each byte), so that runs without an active pixel cost
+            // a few instructions per eight pixels; then only the active pixels
+            // are visited, in the same order as the per-pixel loop below.
+            let words = |y: usize| {
+                let (class, near) = (&classes.class8[y * w..][..w], &classes.near8[y * w..][..w]);
+                class.chunks(8).zip(near.chunks(8)).enumerate().map(|(k, (c, n))| {
+                    let (c, n) = (le_word(c), le_word(n));
+                    let valid = (c | c >> 1) & BYTE_LOW_BITS;
+                    let shadow = c & BYTE_LOW_BITS;
+                    let mixed = n & n >> 1 & valid;
+                    (8 * k, valid, shadow, mixed)
+                })
+            };
+            // Exact capacities first (a fresh `Samples` would otherwise grow
+            // each list a dozen times, copying it each time).
+            let (mut relevant, mut boundary) = (0usize, 0usize);
+            for y in 0..h {
+                for (_, valid, shadow, mixed) in words(y) {
+                    covered += byte_sum(valid);
+                    shadowed[0] += byte_sum(shadow);
+                    relevant += byte_sum(shadow | mixed);
+                    boundary += byte_sum(mixed);
+                }
+            }
+            let samples = &mut all[0];
+            samples.relevant.reserve_exact(relevant);
+            samples.relevant_world.reserve_exact(relevant);
+            samples.boundary.reserve_exact(boundary);
+            samples.boundary_world.reserve_exact(boundary);
+            for y in 0..h {
+                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+                let row = m.y_axis * sy;
+                for (x0, _, shadow, mixed) in words(y) {
+                    let mut active = shadow | mixed;
+                    while active != 0 {
+                        let byte = active.trailing_zeros() / 8;
+                        active &= !(0xff << (8 * byte));
+                        let x = x0 + byte as usize;
+                        let (sx, column) = columns[x];
+                        let (s, b) = ((shadow >> (8 * byte)) as u32 & 1, (mixed >> (8 * byte)) as u32 & 1);
+                        visit(all, 0, (x, y), (sx, sy), row, column, s, b);
+                    }
+                }
+            }
+        } else {
+            // Counts first; for a fresh `Samples` (no capacity yet) also its
+            // lists' exact sizes, as for one light (reused samples have grown
+            // to fit already, and counting every light's relevant pixels costs
+            // a loop over the set bits).
+            let fresh =
+                all.iter().enumerate().fold(0u32, |fresh, (k, samples)| {
+                    fresh | u32::from(samples.relevant.capacity() == 0) << (first + k)
+                }) & slots;
+            let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
+            for (i, d) in grid.depth.iter().enumerate() {
+                if !d.is_finite() {
                     continue;
                 }
-                samples.counts.boundary_candidates += 1;
-                let found = *surface.get_or_insert_with(|| {
-                    surface_at(
-                        grid,
-                        &world_from_screen,
-                        &camera,
-                        options,
-                        (x, y),
-                        (sx, sy, d),
-                        here,
-                        world,
-                        step,
-                        &depth_at,
-                    )
-                });
-                let Some(found) = found else {
-                    samples.counts.rejected_discontinuity += 1;
-                    continue;
-                };
-                let sample = match found {
-                    Surface::Given { tx, ty, .. } => {
-                        let along = |t: DVec3| to_light(rows, t.extend(0.0));
-                        BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
-                    }
-                    Surface::Depth { dx4, dy4, .. } => {
-                        BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
-                    }
-                };
-                if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
-                    samples.counts.rejected_back_facing += 1;
-                    continue;
+                let (shadowed_bits, mixed_bits) = classes.at(i);
+                let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+                covered += 1;
+                for bit in set_bits(shadowed_bits) {
+                    shadowed[bit] += 1;
                 }
-                samples.boundary.push(sample);
-                samples.boundary_world.push(world);
+                for bit in set_bits(mixed_bits & fresh) {
+                    boundary[bit] += 1;
+                    mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
+                }
+            }
+            for bit in set_bits(fresh) {
+                let samples = &mut all[bit - first];
+                let relevant = shadowed[bit] + mixed_only[bit];
+                samples.relevant.reserve_exact(relevant);
+                samples.relevant_world.reserve_exact(relevant);
+                samples.boundary.reserve_exact(boundary[bit]);
+                samples.boundary_world.reserve_exact(boundary[bit]);
+            }
+            for y in 0..h {
+                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+                let row = m.y_axis * sy;
+                for (x, &(sx, column)) in columns.iter().enumerate() {
+                    let i = y * w + x;
+                    if !grid.depth[i].is_finite() {
+                        continue;
+                    }
+                    let (shadowed_bits, mixed_bits) = classes.at(i);
+                    let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+                    if shadowed_bits | mixed_bits == 0 {
+                        continue;
+                    }
+                    visit(all, first, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
+                }
             }
         }
+        for (samples, &shadowed) in all.iter_mut().zip(&shadowed[first..]) {
+            samples.counts.covered += covered;
+            samples.counts.shadowed += shadowed;
+        }
+    };
+    // With rayon, several lights' per-light work (their relevant and
+    // boundary samples) split between threads by light; each share scans
+    // the shared classes itself, so the lists are the same.
+    #[cfg(feature = "rayon")]
+    {
+        let threads = rayon::current_num_threads().min(all.len());
+        if !classes.one && threads > 1 {
+            use rayon::prelude::*;
+            let chunk = all.len().div_ceil(threads);
+            all.par_chunks_mut(chunk).enumerate().for_each(|(c, part)| scan(part, c * chunk));
+            return;
+        }
     }
-    for (samples, &shadowed) in all.iter_mut().zip(&shadowed) {
-        samples.counts.covered += covered;
-        samples.counts.shadowed += shadowed;
+    scan(all, 0);
+}
+
+/// Bit 0 of every byte of a `u64`.
+const BYTE_LOW_BITS: u64 = 0x0101_0101_0101_0101;
+
+/// The sum of a `u64`'s bytes when it is at most 255 (here: of bits 0):
+/// one multiply, without a population count instruction.
+#[inline(always)]
+fn byte_sum(word: u64) -> usize {
+    (word.wrapping_mul(BYTE_LOW_BITS) >> 56) as usize
+}
+
+/// Up to eight bytes as a little-endian `u64` (missing bytes zero).
+#[inline(always)]
+fn le_word(bytes: &[u8]) -> u64 {
+    match <[u8; 8]>::try_from(bytes) {
+        Ok(word) => u64::from_le_bytes(word),
+        Err(_) => bytes.iter().rev().fold(0, |word, &b| word << 8 | u64::from(b)),
+    }
+}
+
+/// Where the camera is seen from a surface point ([`crate::Camera::towards_viewer`]).
+#[derive(Clone, Copy)]
+enum Viewer {
+    /// Orthographic: the same direction everywhere.
+    Direction(DVec3),
+    /// Perspective: the eye.
+    Eye(DVec3),
+}
+
+impl Viewer {
+    fn towards(self, world: DVec3) -> DVec3 {
+        match self {
+            Self::Direction(d) => d,
+            Self::Eye(eye) => eye - world,
+        }
     }
 }
 
@@ -426,7 +582,7 @@ impl Surface {
 fn surface_at(
     grid: &Grid,
     world_from_screen: &glam::DMat4,
-    camera: &crate::Camera,
+    viewer: Viewer,
     options: &SampleOptions,
     (x, y): (usize, usize),
     (sx, sy, d): (f64, f64, f64),
@@ -468,7 +624,7 @@ fn surface_at(
             let tx = (dx4.truncate() - world * dx4.w) / here.w;
             let ty = (dy4.truncate() - world * dy4.w) / here.w;
             let mut normal = tx.cross(ty).normalize_or_zero();
-            if normal.dot(camera.towards_viewer(world)) < 0.0 {
+            if normal.dot(viewer.towards(world)) < 0.0 {
                 normal = -normal;
             }
             // Homogeneous point and its homogeneous derivatives: one scale.
@@ -509,4 +665,57 @@ pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) ->
         Light::Point { position } | Light::Spot { position, .. } => (position - p).normalize_or_zero(),
     };
     n.dot(to_light) > min_cosine
+}
+
+#[cfg(test)]
+mod tests {
+    use super::or_3x3;
+
+    /// The 3x3 OR with clamped edges, pixel by pixel.
+    fn reference(src: &[u64], w: usize, h: usize) -> Vec<u64> {
+        let mut out = vec![0; src.len()];
+        for y in 0..h {
+            for x in 0..w {
+                for dy in [-1isize, 0, 1] {
+                    for dx in [-1isize, 0, 1] {
+                        let yy = y.saturating_add_signed(dy).min(h - 1);
+                        let xx = x.saturating_add_signed(dx).min(w - 1);
+                        out[y * w + x] |= src[yy * w + xx];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn or_3x3_equals_the_pixel_by_pixel_or() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let (mut tmp, mut dst) = (Vec::new(), Vec::new());
+        for w in 1..=11 {
+            for h in 1..=5 {
+                // Sparse single bits, so that a missed neighbour shows.
+                let src: Vec<u64> = (0..w * h)
+                    .map(|_| {
+                        state ^= state << 13;
+                        state ^= state >> 7;
+                        state ^= state << 17;
+                        if state % 4 == 0 {
+                            1 << (state >> 58)
+                        } else {
+                            0
+                        }
+                    })
+                    .collect();
+                or_3x3(&src, w, h, &mut tmp, &mut dst);
+                assert_eq!(dst, reference(&src, w, h), "{w}x{h}");
+                let bytes: Vec<u8> = src.iter().map(|&v| (v | v >> 8 | v >> 16 | v >> 24) as u8).collect();
+                let (mut tmp8, mut dst8) = (Vec::new(), Vec::new());
+                or_3x3(&bytes, w, h, &mut tmp8, &mut dst8);
+                let wide: Vec<u64> = bytes.iter().map(|&b| u64::from(b)).collect();
+                let expected: Vec<u8> = reference(&wide, w, h).iter().map(|&v| v as u8).collect();
+                assert_eq!(dst8, expected, "{w}x{h} bytes");
+            }
+        }
+    }
 }

@@ -65,6 +65,7 @@ fn parts(g: &DMat3, s: &BoundarySample) -> Option<Parts> {
 /// Badness of one sample under `g` (texel units); `+∞` behind the light or
 /// where the light sees the surface edge-on.
 #[must_use]
+#[inline]
 pub fn sample_badness(g: &DMat3, s: &BoundarySample) -> f64 {
     parts(g, s).map_or(f64::INFINITY, |p| crate::score::badness_of_jacobian(&p.jac))
 }

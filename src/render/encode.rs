@@ -103,7 +103,7 @@ impl Renderer {
                 // The pass's own depth is never clipped at near and far.
                 self.draw_pulled(&mut pass, &m.clip_from_world, DepthClip::Unclipped)
             } else {
-                self.draw_scene(&mut pass, &m.clip_from_world, clip)
+                self.draw_scene(&mut pass, &self.scene.positions, &m.clip_from_world, clip)
             };
         }
         // SGSM: the sweep reads the finished maps.
@@ -133,8 +133,17 @@ impl Renderer {
     /// Draws the scene, less the objects outside the clip volume of
     /// `clip_from_world` when [`RendererOptions::cull_objects`](super::RendererOptions::cull_objects)
     /// is set; returns the triangles drawn.
-    fn draw_scene(&self, pass: &mut wgpu::RenderPass<'_>, clip_from_world: &glam::DMat4, clip: DepthClip) -> u64 {
-        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+    /// `vertices` is the scene's full vertex buffer ([`VertexRaw::layout`](super::uniforms::VertexRaw::layout))
+    /// or its packed positions (the shadow pass's
+    /// [`position_layout`](super::uniforms::VertexRaw::position_layout)).
+    fn draw_scene(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        vertices: &wgpu::Buffer,
+        clip_from_world: &glam::DMat4,
+        clip: DepthClip,
+    ) -> u64 {
+        pass.set_vertex_buffer(0, vertices.slice(..));
         pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         if !self.options.cull_objects {
             pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
@@ -213,7 +222,7 @@ impl Renderer {
             CameraOutput::Color => &state.camera.color,
             CameraOutput::ColorAndMasks => &state.camera.color_masks,
         });
-        self.draw_scene(&mut pass, clip_from_world, DepthClip::Clipped)
+        self.draw_scene(&mut pass, &self.scene.vertices, clip_from_world, DepthClip::Clipped)
     }
 
     /// Draws the scene from the capture's camera into its targets (the
@@ -237,7 +246,7 @@ impl Renderer {
         });
         pass.set_pipeline(&deferred.capture);
         pass.set_bind_group(0, &self.camera_bindings.bind_group, &[]);
-        self.draw_scene(&mut pass, &capture.camera.clip_from_world(), DepthClip::Clipped);
+        self.draw_scene(&mut pass, &self.scene.vertices, &capture.camera.clip_from_world(), DepthClip::Clipped);
     }
 
     pub(crate) fn encode_analysis_pass(
@@ -268,7 +277,7 @@ impl Renderer {
                 }
                 AnalysisSource::Geometry => {
                     pass.set_pipeline(&state.analysis.geometry);
-                    self.draw_scene(&mut pass, &camera.clip_from_world(), DepthClip::Clipped);
+                    self.draw_scene(&mut pass, &self.scene.vertices, &camera.clip_from_world(), DepthClip::Clipped);
                 }
             }
         }

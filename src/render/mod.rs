@@ -258,6 +258,11 @@ pub struct FrameReport {
 /// The scene on the GPU.
 struct GpuScene {
     vertices: wgpu::Buffer,
+    /// The vertices' positions alone, tightly packed (12 bytes a vertex):
+    /// the depth-only shadow passes read nothing else, and a lean stream
+    /// costs a software rasterizer's vertex fetch less than every third
+    /// float of [`VertexRaw`].
+    positions: wgpu::Buffer,
     indices: wgpu::Buffer,
     /// Per index slot, the slot of the vertex across the edge starting at
     /// that corner (`spsm::adjacency`), for the SPSM pass's silhouette edges;
@@ -415,6 +420,11 @@ impl Renderer {
                 // Storage: the SPSM pass pulls whole triangles; copy: the
                 // antialiased lookup reads the positions back once.
                 usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            }),
+            positions: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lixel scene positions"),
+                contents: bytemuck::cast_slice(&vertices.iter().map(|v| v.position).collect::<Vec<_>>()),
+                usage: wgpu::BufferUsages::VERTEX,
             }),
             indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("lixel scene indices"),

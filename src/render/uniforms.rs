@@ -218,10 +218,11 @@ impl VertexRaw {
         }
     }
 
-    /// The layout with the position only (shadow pass).
+    /// The layout of the packed positions buffer (shadow pass): the
+    /// position attribute alone, 12 bytes a vertex.
     pub(crate) fn position_layout() -> wgpu::VertexBufferLayout<'static> {
         wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<Self>() as u64,
+            array_stride: std::mem::size_of::<[f32; 3]>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &Self::ATTRIBUTES[..1],
         }
