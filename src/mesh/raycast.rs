@@ -6,8 +6,9 @@
 //! The BVH splits each node's triangles where the surface-area heuristic
 //! over 16 centroid bins per axis is least (below depth 32 it splits at the
 //! centroid median of the longest axis, which bounds the depth; build
-//! `O(n log n)`, leaves of at most [`LEAF_SIZE`] triangles); queries use slab tests against node boxes and Möller–Trumbore
-//! against triangles (`O(log n)` typical). Rays are traced in parallel with
+//! `O(n log n)`, leaves of at most [`LEAF_SIZE`] triangles); queries use
+//! slab tests against node boxes and Möller–Trumbore against triangles
+//! (`O(log n)` typical). Rays are traced in parallel with
 //! rayon.
 
 use glam::{DMat4, DVec3, Vec2, Vec3};
@@ -288,10 +289,8 @@ fn half_area(min: Vec3, max: Vec3) -> f32 {
 /// `items.len()` (the extreme centroids of an axis with extent fall in its
 /// first and last bins).
 fn sah_partition(items: &mut [Item], cmin: Vec3, extent: Vec3) -> usize {
-    let bin_of = |c: f32, axis: usize| -> usize {
-        let scale = SAH_BINS as f32 / extent[axis];
-        (((c - cmin[axis]) * scale) as usize).min(SAH_BINS - 1)
-    };
+    let scale = Vec3::splat(SAH_BINS as f32) / extent;
+    let bin_of = |c: f32, axis: usize| -> usize { (((c - cmin[axis]) * scale[axis]) as usize).min(SAH_BINS - 1) };
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
