@@ -33,16 +33,21 @@ impl SampleWorkspace {
     }
 }
 
-/// A readback brought to lixel's convention: top-down rows, lixel depth
-/// (non-finite where nothing was drawn), screen placement.
+/// Where a readback lies on the screen and how to read it in lixel's
+/// convention (top-down rows, lixel depth, non-finite where nothing was
+/// drawn). The readback's buffers are read in place ([`Pixels`]); only a
+/// depth in another convention is converted, into `converted`.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Grid {
     width: usize,
     height: usize,
-    depth: Vec<f64>,
-    bits: Vec<u32>,
-    normals: Vec<[f32; 3]>,
-    has_normals: bool,
+    /// Row 0 of the readback is the bottom of the screen.
+    bottom_up: bool,
+    /// The depth is lixel's already (read as it is).
+    lixel_depth: bool,
+    /// Lixel depth of a readback in another depth convention, in the
+    /// readback's own order; empty for lixel depth.
+    converted: Vec<f64>,
     /// Screen position of the readback's top-left corner, full-resolution pixels.
     origin: glam::DVec2,
     /// Full-resolution pixels per readback pixel.
@@ -50,13 +55,8 @@ pub(super) struct Grid {
 }
 
 impl Grid {
-    /// The read-back normals, if any.
-    fn normals(&self) -> Option<&[[f32; 3]]> {
-        self.has_normals.then_some(self.normals.as_slice())
-    }
-
-    /// Brings `readback` (of `camera`'s view) to lixel's convention, reusing
-    /// the buffers.
+    /// Places `readback` (of `camera`'s view) on the screen and converts its
+    /// depth if it is not lixel's, reusing the buffer.
     pub(super) fn fill(&mut self, camera: &crate::Camera, readback: &Readback<'_>) -> Result<()> {
         use crate::conventions::DepthDirection;
         let (w, h) = (readback.width as usize, readback.height as usize);
@@ -110,50 +110,146 @@ impl Grid {
                 f64::NAN
             }
         };
-        let source_row = |y: usize| match layout.rows {
-            RowOrder::TopDown => y,
-            RowOrder::BottomUp => h - 1 - y,
-        };
-        let rows = |y: usize| source_row(y) * w..source_row(y) * w + w;
         self.width = w;
         self.height = h;
+        self.bottom_up = layout.rows == RowOrder::BottomUp;
         self.origin = glam::DVec2::new(f64::from(rect.x), f64::from(top));
         self.step = glam::DVec2::new(f64::from(rect.width) / w as f64, f64::from(rect.height) / h as f64);
-        self.depth.clear();
-        self.bits.clear();
-        self.normals.clear();
-        self.has_normals = readback.normals.is_some();
-        // Filled row by row: sized once (a fresh workspace would otherwise
-        // grow each buffer a dozen times, copying it each time).
-        self.depth.reserve_exact(w * h);
-        self.bits.reserve_exact(w * h);
-        if self.has_normals {
-            self.normals.reserve_exact(w * h);
-        }
-        // Row by row over exact-size slices (a flat_map over rows was half
-        // the cost of a one-light extraction).
-        for y in 0..h {
-            let row = rows(y);
-            match layout.depth {
-                // The common case without conversion: what `to_lixel` does
-                // for it, inline.
-                ReadbackDepth::Lixel => self.depth.extend(readback.depth[row.clone()].iter().map(|&v| {
-                    let v = f64::from(v);
-                    if (0.0..1.0).contains(&v) {
-                        v
-                    } else {
-                        f64::NAN
-                    }
-                })),
-                _ => self.depth.extend(readback.depth[row.clone()].iter().map(|&v| to_lixel(v))),
-            }
-            self.bits.extend_from_slice(&readback.shadow_bits[row.clone()]);
-            if let Some(normals) = readback.normals {
-                self.normals.extend_from_slice(&normals[row]);
-            }
+        self.lixel_depth = layout.depth == ReadbackDepth::Lixel;
+        self.converted.clear();
+        if !self.lixel_depth {
+            self.converted.reserve_exact(w * h);
+            self.converted.extend(readback.depth.iter().map(|&v| to_lixel(v)));
         }
         Ok(())
     }
+
+    /// `readback` (the one given to [`Self::fill`]) as lixel reads it.
+    fn pixels<'a>(&'a self, readback: &Readback<'a>) -> Pixels<'a> {
+        Pixels {
+            width: self.width,
+            height: self.height,
+            bottom_up: self.bottom_up,
+            depth: if self.lixel_depth { Depth::Lixel(readback.depth) } else { Depth::Converted(&self.converted) },
+            bits: readback.shadow_bits,
+            normals: readback.normals,
+        }
+    }
+}
+
+/// A readback's buffers as they are, read in lixel's convention: pixel
+/// `(x, y)` counts rows from the top of the screen.
+#[derive(Clone, Copy)]
+struct Pixels<'a> {
+    width: usize,
+    height: usize,
+    bottom_up: bool,
+    depth: Depth<'a>,
+    bits: &'a [u32],
+    normals: Option<&'a [[f32; 3]]>,
+}
+
+/// A readback's depth: lixel's own (as read back; valid in `[0, 1)`) or
+/// converted to it (non-finite where nothing was drawn).
+#[derive(Clone, Copy)]
+enum Depth<'a> {
+    Lixel(&'a [f32]),
+    Converted(&'a [f64]),
+}
+
+impl Pixels<'_> {
+    /// The index in the readback's buffers of the first pixel of row `y`
+    /// (from the top).
+    #[inline]
+    fn row_start(&self, y: usize) -> usize {
+        (if self.bottom_up { self.height - 1 - y } else { y }) * self.width
+    }
+
+    /// The index in the readback's buffers of pixel `(x, y)`.
+    #[inline]
+    fn index(&self, x: usize, y: usize) -> usize {
+        self.row_start(y) + x
+    }
+
+    /// Lixel depth at buffer index `i`, NaN where nothing was drawn (the
+    /// same bits as converting the whole readback to `f64` first).
+    #[inline]
+    fn depth(&self, i: usize) -> f64 {
+        match self.depth {
+            Depth::Lixel(depth) => {
+                let v = f64::from(depth[i]);
+                if (0.0..1.0).contains(&v) {
+                    v
+                } else {
+                    f64::NAN
+                }
+            }
+            Depth::Converted(depth) => depth[i],
+        }
+    }
+
+    /// Row `y`'s pixels (from the top) as bits: each run of 64 pixels as one
+    /// word of covered pixels and one of those covered whose shadow bits meet
+    /// `mask`, pixel `64 k + j` at bit `j` of word `k`.
+    fn row_words(&self, y: usize, mask: u32, push: impl FnMut(u64, u64)) {
+        let start = self.row_start(y);
+        let bits = &self.bits[start..][..self.width];
+        match self.depth {
+            // `(0.0..1.0).contains` on the `f32` is the same test as on its
+            // exact `f64`.
+            Depth::Lixel(depth) => {
+                pack_row(&depth[start..][..self.width], bits, mask, |d| (0.0..1.0).contains(&d), push);
+            }
+            Depth::Converted(depth) => {
+                pack_row(&depth[start..][..self.width], bits, mask, f64::is_finite, push);
+            }
+        }
+    }
+
+    /// Row `y`'s pixels (from the top): whether each is covered, and its shadow bits.
+    fn row_pixels(&self, y: usize, mut each: impl FnMut(bool, u32)) {
+        let start = self.row_start(y);
+        let bits = &self.bits[start..][..self.width];
+        match self.depth {
+            Depth::Lixel(depth) => {
+                for (&d, &b) in depth[start..][..self.width].iter().zip(bits) {
+                    each((0.0..1.0).contains(&d), b);
+                }
+            }
+            Depth::Converted(depth) => {
+                for (&d, &b) in depth[start..][..self.width].iter().zip(bits) {
+                    each(d.is_finite(), b);
+                }
+            }
+        }
+    }
+}
+
+/// [`Pixels::row_words`] over one row's depth and shadow bits: a byte per
+/// pixel first (a loop without dependences, so it vectorizes), then eight
+/// bytes to eight bits by one multiply.
+#[inline(always)]
+fn pack_row<T: Copy>(depth: &[T], bits: &[u32], mask: u32, valid: impl Fn(T) -> bool, mut push: impl FnMut(u64, u64)) {
+    for (depth, bits) in depth.chunks(64).zip(bits.chunks(64)) {
+        let (mut covered, mut shadowed) = ([0u8; 64], [0u8; 64]);
+        for ((c, s), (&d, &b)) in covered.iter_mut().zip(&mut shadowed).zip(depth.iter().zip(bits)) {
+            let ok = u8::from(valid(d));
+            *c = ok;
+            *s = ok & u8::from(b & mask != 0);
+        }
+        push(pack_bytes(&covered), pack_bytes(&shadowed));
+    }
+}
+
+/// Bit 0 of byte `i` of `bytes` (each 0 or 1) as bit `i` of a `u64`.
+#[inline(always)]
+fn pack_bytes(bytes: &[u8; 64]) -> u64 {
+    bytes.chunks_exact(8).enumerate().fold(0, |word, (k, eight)| {
+        let eight = u64::from_le_bytes(eight.try_into().expect("eight bytes"));
+        // Byte `i`'s bit 0 (bit `8 i`) lands on bit `56 + i`, with no
+        // carries when every byte is 0 or 1.
+        word | (eight.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * k)
+    })
 }
 
 /// The buffers match the readback's size.
@@ -194,95 +290,151 @@ fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
             *t = l | c | r;
         }
     }
+    or_rows(tmp, w, h, dst);
+}
+
+/// Each row of `src` (`h` rows of `w` items) ORed with the rows above and
+/// below (clamped at the edges), into `dst`.
+fn or_rows<T: Copy + Default + std::ops::BitOr<Output = T>>(src: &[T], w: usize, h: usize, dst: &mut Vec<T>) {
     dst.clear();
     dst.resize(src.len(), T::default());
     for y in 0..h {
         let (above, here, below) =
-            (&tmp[y.saturating_sub(1) * w..][..w], &tmp[y * w..][..w], &tmp[(y + 1).min(h - 1) * w..][..w]);
+            (&src[y.saturating_sub(1) * w..][..w], &src[y * w..][..w], &src[(y + 1).min(h - 1) * w..][..w]);
         for (((cell, &a), &m), &b) in dst[y * w..][..w].iter_mut().zip(above).zip(here).zip(below) {
             *cell = a | m | b;
         }
     }
 }
 
+/// [`or_3x3`] of a bit image: `h` rows of `words` `u64`s, pixel `64 k + j`
+/// of a row at bit `j` of its word `k`, `w` pixels a row (the bits beyond
+/// them zero, in `src` and in `dst`).
+fn or_3x3_bits(src: &[u64], w: usize, words: usize, h: usize, tmp: &mut Vec<u64>, dst: &mut Vec<u64>) {
+    tmp.clear();
+    tmp.reserve_exact(src.len());
+    // The last word's pixels (a whole word when `w` is a multiple of 64).
+    let last = u64::MAX >> ((64 - w % 64) % 64);
+    for row in src.chunks_exact(words) {
+        for k in 0..words {
+            let word = row[k];
+            // Left neighbours move up a bit, right ones down; the edges'
+            // clamped neighbour is the pixel itself.
+            let from_left = if k > 0 { row[k - 1] >> 63 } else { 0 };
+            let from_right = if k + 1 < words { row[k + 1] << 63 } else { 0 };
+            let spread = word | word << 1 | from_left | word >> 1 | from_right;
+            tmp.push(if k + 1 == words { spread & last } else { spread });
+        }
+    }
+    or_rows(tmp, words, h, dst);
+}
+
 /// Per pixel and light slot `k` (the `k`-th light extracted): shadowed, and
 /// lit, over covered pixels; and the OR of both over the 3x3 neighbourhood,
 /// so a slot both shadowed and lit nearby marks a shadow boundary. One light
-/// packs into a byte (bit 0 shadowed, bit 1 lit); up to 32 into a `u64`
-/// (shadowed slots in the low half, lit in the high half), so one pass
-/// serves every light.
+/// packs into bit images (a bit per pixel, 64 pixels a word); up to 32 into
+/// a `u64` per pixel (shadowed slots in the low half, lit in the high half),
+/// so one pass serves every light.
 #[derive(Clone, Debug, Default)]
 struct Classes {
-    /// One light (bytes) or several (`u64`s).
+    /// One light (bit images) or several (`u64`s).
     one: bool,
-    class8: Vec<u8>,
-    near8: Vec<u8>,
-    tmp8: Vec<u8>,
+    /// One light: words per row.
+    words: usize,
+    /// One light: covered pixels.
+    covered: Vec<u64>,
+    /// One light: shadowed pixels.
+    shadowed: Vec<u64>,
+    /// One light: boundary pixels (covered, with shadowed and lit pixels in
+    /// their 3x3 neighbourhood).
+    mixed: Vec<u64>,
+    /// One light: scratch.
+    lit: Vec<u64>,
+    near_lit: Vec<u64>,
+    tmp_bits: Vec<u64>,
     class64: Vec<u64>,
     near64: Vec<u64>,
     tmp64: Vec<u64>,
 }
 
 impl Classes {
-    fn fill(&mut self, grid: &Grid, bits: &[u32]) {
-        let (w, h) = (grid.width, grid.height);
-        let valid = |d: f64| d.is_finite();
-        let pixels = grid.depth.iter().zip(&grid.bits);
+    fn fill(&mut self, pixels: &Pixels<'_>, bits: &[u32]) {
+        let (w, h) = (pixels.width, pixels.height);
         if let [bit] = *bits {
             self.one = true;
-            self.class8.clear();
-            self.class8.extend(pixels.map(|(&d, &b)| match (valid(d), b >> bit & 1 != 0) {
-                (false, _) => 0,
-                (true, true) => 1,
-                (true, false) => 2,
-            }));
-            or_3x3(&self.class8, w, h, &mut self.tmp8, &mut self.near8);
+            let words = w.div_ceil(64);
+            self.words = words;
+            let (covered, shadowed) = (&mut self.covered, &mut self.shadowed);
+            covered.clear();
+            shadowed.clear();
+            covered.reserve_exact(words * h);
+            shadowed.reserve_exact(words * h);
+            for y in 0..h {
+                pixels.row_words(y, 1 << bit, |c, s| {
+                    covered.push(c);
+                    shadowed.push(s);
+                });
+            }
+            self.lit.clear();
+            self.lit.extend(covered.iter().zip(&*shadowed).map(|(&c, &s)| c & !s));
+            or_3x3_bits(shadowed, w, words, h, &mut self.tmp_bits, &mut self.mixed);
+            or_3x3_bits(&self.lit, w, words, h, &mut self.tmp_bits, &mut self.near_lit);
+            for ((m, &l), &c) in self.mixed.iter_mut().zip(&self.near_lit).zip(&*covered) {
+                *m &= l & c;
+            }
             return;
         }
         self.one = false;
         self.class64.clear();
+        self.class64.reserve_exact(w * h);
+        let class64 = &mut self.class64;
         if bits.iter().enumerate().all(|(k, &bit)| bit as usize == k) {
             // Slot `k` is bit `k` (what every caller passes): the classes
             // are the masked bits and their complement, without a loop.
             let mask = if bits.len() >= 32 { u32::MAX } else { (1u32 << bits.len()) - 1 };
-            self.class64.extend(pixels.map(|(&d, &b)| {
-                if valid(d) {
-                    u64::from(b & mask) | u64::from(!b & mask) << 32
-                } else {
-                    0
-                }
-            }));
+            for y in 0..h {
+                pixels.row_pixels(y, |valid, b| {
+                    class64.push(if valid { u64::from(b & mask) | u64::from(!b & mask) << 32 } else { 0 });
+                });
+            }
         } else {
-            self.class64.extend(pixels.map(|(&d, &b)| {
-                if !valid(d) {
-                    return 0;
-                }
-                bits.iter()
-                    .enumerate()
-                    .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
-            }));
+            for y in 0..h {
+                pixels.row_pixels(y, |valid, b| {
+                    class64.push(if valid {
+                        bits.iter()
+                            .enumerate()
+                            .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
+                    } else {
+                        0
+                    });
+                });
+            }
         }
         or_3x3(&self.class64, w, h, &mut self.tmp64, &mut self.near64);
     }
 
-    /// Slots shadowed at pixel `i`, and slots with a shadow boundary there.
-    fn at(&self, i: usize) -> (u32, u32) {
-        if self.one {
-            let (class, near) = (self.class8[i], self.near8[i]);
-            (u32::from(class & 1), u32::from(near & (near >> 1) & 1))
-        } else {
-            let (class, near) = (self.class64[i], self.near64[i]);
-            (class as u32, near as u32 & (near >> 32) as u32)
-        }
+    /// Several lights: whether pixel `i` (top-down) is covered, the slots
+    /// shadowed there, and the slots with a shadow boundary there.
+    #[inline]
+    fn at(&self, i: usize) -> (bool, u32, u32) {
+        let (class, near) = (self.class64[i], self.near64[i]);
+        // A covered pixel is shadowed or lit for every slot (there is one at least).
+        (class != 0, class as u32, near as u32 & (near >> 32) as u32)
     }
 }
 
-/// Fills `all[k]` (already reset to their bodies, no samples) from the
-/// readback in `workspace.grid` for light bit `workspace.bits[k]` (at most 32
-/// lights), in one pass over the pixels.
-pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, options: &SampleOptions) {
+/// Fills `all[k]` (already reset to their bodies, no samples) from
+/// `readback` (placed by `workspace.grid`) for light bit `workspace.bits[k]`
+/// (at most 32 lights), in one pass over the pixels.
+pub(super) fn extract(
+    all: &mut [Samples],
+    workspace: &mut SampleWorkspace,
+    readback: &Readback<'_>,
+    options: &SampleOptions,
+) {
     let SampleWorkspace { grid, classes, bits, columns } = workspace;
     let grid = &*grid;
+    let pixels = grid.pixels(readback);
     let (w, h) = (grid.width, grid.height);
     let n = w * h;
     if n == 0 || all.is_empty() {
@@ -294,7 +446,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     let step = grid.step;
     // Lixel depth, non-finite where nothing was drawn (see `Grid`).
     let depth_at = |x: usize, y: usize| -> Option<f64> {
-        let d = grid.depth[y * w + x];
+        let d = pixels.depth(pixels.index(x, y));
         d.is_finite().then_some(d)
     };
     // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0:
@@ -322,7 +474,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         *rows = samples.frame.light_from_world_3x4_rows();
     }
     let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
-    classes.fill(grid, bits);
+    classes.fill(&pixels, bits);
     let classes = &*classes;
     // The camera's side of every surface (`Camera::towards_viewer`, with
     // the eye made once rather than per boundary pixel: the same bits).
@@ -339,13 +491,12 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
                  column: DVec4,
                  shadowed_bits: u32,
                  mixed_bits: u32| {
-        let i = y * w + x;
         let active = shadowed_bits | mixed_bits;
-        let d = grid.depth[i];
+        let d = pixels.depth(pixels.index(x, y));
         let here = unproject(column, row, d);
         if !(here.w > 0.0) || !here.is_finite() {
             for bit in set_bits(active) {
-                all[bit].counts.rejected_invalid += 1;
+                all[bit - first].counts.rejected_invalid += 1;
             }
             return;
         }
@@ -363,7 +514,18 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             }
             samples.counts.boundary_candidates += 1;
             let found = *surface.get_or_insert_with(|| {
-                surface_at(grid, &world_from_screen, viewer, options, (x, y), (sx, sy, d), here, world, step, &depth_at)
+                surface_at(
+                    &pixels,
+                    &world_from_screen,
+                    viewer,
+                    options,
+                    (x, y),
+                    (sx, sy, d),
+                    here,
+                    world,
+                    step,
+                    &depth_at,
+                )
             });
             let Some(found) = found else {
                 samples.counts.rejected_discontinuity += 1;
@@ -386,6 +548,46 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
             samples.boundary_world.push(world);
         }
     };
+    if classes.one {
+        // One light: its classes as bit images, so that runs without an
+        // active pixel cost a few instructions per 64 pixels; then only the
+        // active pixels are visited, in pixel order.
+        let words = classes.words;
+        let (mut covered, mut shadowed, mut relevant, mut boundary) = (0usize, 0usize, 0usize, 0usize);
+        for ((&c, &s), &b) in classes.covered.iter().zip(&classes.shadowed).zip(&classes.mixed) {
+            covered += c.count_ones() as usize;
+            shadowed += s.count_ones() as usize;
+            relevant += (s | b).count_ones() as usize;
+            boundary += b.count_ones() as usize;
+        }
+        // Exact capacities first (a fresh `Samples` would otherwise grow
+        // each list a dozen times, copying it each time).
+        let samples = &mut all[0];
+        samples.relevant.reserve_exact(relevant);
+        samples.relevant_world.reserve_exact(relevant);
+        samples.boundary.reserve_exact(boundary);
+        samples.boundary_world.reserve_exact(boundary);
+        for y in 0..h {
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let row = m.y_axis * sy;
+            let range = y * words..(y + 1) * words;
+            for (k, (&shadow, &mixed)) in classes.shadowed[range.clone()].iter().zip(&classes.mixed[range]).enumerate()
+            {
+                let mut active = shadow | mixed;
+                while active != 0 {
+                    let j = active.trailing_zeros();
+                    active &= active - 1;
+                    let x = 64 * k + j as usize;
+                    let (sx, column) = columns[x];
+                    let (s, b) = ((shadow >> j) as u32 & 1, (mixed >> j) as u32 & 1);
+                    visit(all, 0, (x, y), (sx, sy), row, column, s, b);
+                }
+            }
+        }
+        all[0].counts.covered += covered;
+        all[0].counts.shadowed += shadowed;
+        return;
+    }
     // The slots `first..first + all.len()` (all of them, or one thread's
     // share): each light's samples in pixel order, whichever share it is in.
     let scan = |all: &mut [Samples], first: usize| {
@@ -395,100 +597,49 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         // a loop over every light at every pixel.
         let mut covered = 0usize;
         let mut shadowed = [0usize; 32];
-        if classes.one && first == 0 && slots & 1 != 0 {
-            // One light: eight pixels' classes at a time, as bytes of a `u64`
-            // (bit 0 of each byte), so that runs without an active pixel cost
-            // a few instructions per eight pixels; then only the active pixels
-            // are visited, in the same order as the per-pixel loop below.
-            let words = |y: usize| {
-                let (class, near) = (&classes.class8[y * w..][..w], &classes.near8[y * w..][..w]);
-                class.chunks(8).zip(near.chunks(8)).enumerate().map(|(k, (c, n))| {
-                    let (c, n) = (le_word(c), le_word(n));
-                    let valid = (c | c >> 1) & BYTE_LOW_BITS;
-                    let shadow = c & BYTE_LOW_BITS;
-                    let mixed = n & n >> 1 & valid;
-                    (8 * k, valid, shadow, mixed)
-                })
-            };
-            // Exact capacities first (a fresh `Samples` would otherwise grow
-            // each list a dozen times, copying it each time).
-            let (mut relevant, mut boundary) = (0usize, 0usize);
-            for y in 0..h {
-                for (_, valid, shadow, mixed) in words(y) {
-                    covered += byte_sum(valid);
-                    shadowed[0] += byte_sum(shadow);
-                    relevant += byte_sum(shadow | mixed);
-                    boundary += byte_sum(mixed);
-                }
+        // Counts first; for a fresh `Samples` (no capacity yet) also its
+        // lists' exact sizes (reused samples have grown to fit already, and
+        // counting every light's relevant pixels costs a loop over the set
+        // bits).
+        let fresh = all
+            .iter()
+            .enumerate()
+            .fold(0u32, |fresh, (k, samples)| fresh | u32::from(samples.relevant.capacity() == 0) << (first + k))
+            & slots;
+        let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
+        for i in 0..n {
+            let (valid, shadowed_bits, mixed_bits) = classes.at(i);
+            if !valid {
+                continue;
             }
-            let samples = &mut all[0];
+            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+            covered += 1;
+            for bit in set_bits(shadowed_bits) {
+                shadowed[bit] += 1;
+            }
+            for bit in set_bits(mixed_bits & fresh) {
+                boundary[bit] += 1;
+                mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
+            }
+        }
+        for bit in set_bits(fresh) {
+            let samples = &mut all[bit - first];
+            let relevant = shadowed[bit] + mixed_only[bit];
             samples.relevant.reserve_exact(relevant);
             samples.relevant_world.reserve_exact(relevant);
-            samples.boundary.reserve_exact(boundary);
-            samples.boundary_world.reserve_exact(boundary);
-            for y in 0..h {
-                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-                let row = m.y_axis * sy;
-                for (x0, _, shadow, mixed) in words(y) {
-                    let mut active = shadow | mixed;
-                    while active != 0 {
-                        let byte = active.trailing_zeros() / 8;
-                        active &= !(0xff << (8 * byte));
-                        let x = x0 + byte as usize;
-                        let (sx, column) = columns[x];
-                        let (s, b) = ((shadow >> (8 * byte)) as u32 & 1, (mixed >> (8 * byte)) as u32 & 1);
-                        visit(all, 0, (x, y), (sx, sy), row, column, s, b);
-                    }
-                }
-            }
-        } else {
-            // Counts first; for a fresh `Samples` (no capacity yet) also its
-            // lists' exact sizes, as for one light (reused samples have grown
-            // to fit already, and counting every light's relevant pixels costs
-            // a loop over the set bits).
-            let fresh =
-                all.iter().enumerate().fold(0u32, |fresh, (k, samples)| {
-                    fresh | u32::from(samples.relevant.capacity() == 0) << (first + k)
-                }) & slots;
-            let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
-            for (i, d) in grid.depth.iter().enumerate() {
-                if !d.is_finite() {
+            samples.boundary.reserve_exact(boundary[bit]);
+            samples.boundary_world.reserve_exact(boundary[bit]);
+        }
+        for y in 0..h {
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let row = m.y_axis * sy;
+            for (x, &(sx, column)) in columns.iter().enumerate() {
+                let (valid, shadowed_bits, mixed_bits) = classes.at(y * w + x);
+                let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
+                if !valid || shadowed_bits | mixed_bits == 0 {
                     continue;
                 }
-                let (shadowed_bits, mixed_bits) = classes.at(i);
-                let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-                covered += 1;
-                for bit in set_bits(shadowed_bits) {
-                    shadowed[bit] += 1;
-                }
-                for bit in set_bits(mixed_bits & fresh) {
-                    boundary[bit] += 1;
-                    mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
-                }
-            }
-            for bit in set_bits(fresh) {
-                let samples = &mut all[bit - first];
-                let relevant = shadowed[bit] + mixed_only[bit];
-                samples.relevant.reserve_exact(relevant);
-                samples.relevant_world.reserve_exact(relevant);
-                samples.boundary.reserve_exact(boundary[bit]);
-                samples.boundary_world.reserve_exact(boundary[bit]);
-            }
-            for y in 0..h {
-                let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-                let row = m.y_axis * sy;
-                for (x, &(sx, column)) in columns.iter().enumerate() {
-                    let i = y * w + x;
-                    if !grid.depth[i].is_finite() {
-                        continue;
-                    }
-                    let (shadowed_bits, mixed_bits) = classes.at(i);
-                    let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-                    if shadowed_bits | mixed_bits == 0 {
-                        continue;
-                    }
-                    visit(all, first, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
-                }
+                visit(all, first, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
             }
         }
         for (samples, &shadowed) in all.iter_mut().zip(&shadowed[first..]) {
@@ -502,7 +653,7 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
     #[cfg(feature = "rayon")]
     {
         let threads = rayon::current_num_threads().min(all.len());
-        if !classes.one && threads > 1 {
+        if threads > 1 {
             use rayon::prelude::*;
             let chunk = all.len().div_ceil(threads);
             all.par_chunks_mut(chunk).enumerate().for_each(|(c, part)| scan(part, c * chunk));
@@ -510,25 +661,6 @@ pub(super) fn extract(all: &mut [Samples], workspace: &mut SampleWorkspace, opti
         }
     }
     scan(all, 0);
-}
-
-/// Bit 0 of every byte of a `u64`.
-const BYTE_LOW_BITS: u64 = 0x0101_0101_0101_0101;
-
-/// The sum of a `u64`'s bytes when it is at most 255 (here: of bits 0):
-/// one multiply, without a population count instruction.
-#[inline(always)]
-fn byte_sum(word: u64) -> usize {
-    (word.wrapping_mul(BYTE_LOW_BITS) >> 56) as usize
-}
-
-/// Up to eight bytes as a little-endian `u64` (missing bytes zero).
-#[inline(always)]
-fn le_word(bytes: &[u8]) -> u64 {
-    match <[u8; 8]>::try_from(bytes) {
-        Ok(word) => u64::from_le_bytes(word),
-        Err(_) => bytes.iter().rev().fold(0, |word, &b| word << 8 | u64::from(b)),
-    }
 }
 
 /// Where the camera is seen from a surface point ([`crate::Camera::towards_viewer`]).
@@ -580,7 +712,7 @@ impl Surface {
 /// or where the derivatives are not finite.
 #[allow(clippy::too_many_arguments)]
 fn surface_at(
-    grid: &Grid,
+    pixels: &Pixels<'_>,
     world_from_screen: &glam::DMat4,
     viewer: Viewer,
     options: &SampleOptions,
@@ -591,7 +723,7 @@ fn surface_at(
     step: glam::DVec2,
     depth_at: &impl Fn(usize, usize) -> Option<f64>,
 ) -> Option<Surface> {
-    let (w, h) = (grid.width, grid.height);
+    let (w, h) = (pixels.width, pixels.height);
     // Depth slope along each screen axis (full-resolution units).
     let slope = |dx: isize, dy: isize| -> Option<f64> {
         let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
@@ -605,8 +737,8 @@ fn surface_at(
         (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
             .then_some(first / if dx != 0 { step.x } else { step.y })
     };
-    let normal_given = grid.normals().map(|normals| {
-        let [nx, ny, nz] = normals[y * w + x];
+    let normal_given = pixels.normals.map(|normals| {
+        let [nx, ny, nz] = normals[pixels.index(x, y)];
         DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
     });
     match normal_given.and_then(DVec3::try_normalize) {
@@ -669,7 +801,20 @@ pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) ->
 
 #[cfg(test)]
 mod tests {
-    use super::or_3x3;
+    use super::{or_3x3, or_3x3_bits, pack_bytes};
+
+    #[test]
+    fn pack_bytes_puts_byte_i_on_bit_i() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..1000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let bytes: [u8; 64] = std::array::from_fn(|i| u8::from(state >> i & 1 != 0));
+            assert_eq!(pack_bytes(&bytes), state);
+        }
+        assert_eq!(pack_bytes(&[1; 64]), u64::MAX);
+    }
 
     /// The 3x3 OR with clamped edges, pixel by pixel.
     fn reference(src: &[u64], w: usize, h: usize) -> Vec<u64> {
@@ -715,6 +860,45 @@ mod tests {
                 let wide: Vec<u64> = bytes.iter().map(|&b| u64::from(b)).collect();
                 let expected: Vec<u8> = reference(&wide, w, h).iter().map(|&v| v as u8).collect();
                 assert_eq!(dst8, expected, "{w}x{h} bytes");
+            }
+        }
+    }
+
+    #[test]
+    fn or_3x3_bits_equals_the_pixel_by_pixel_or() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let (mut tmp, mut dst) = (Vec::new(), Vec::new());
+        for w in [1usize, 2, 3, 63, 64, 65, 127, 128, 129, 180] {
+            let words = w.div_ceil(64);
+            for h in 1..=4 {
+                let pixels: Vec<u64> = (0..w * h)
+                    .map(|_| {
+                        state ^= state << 13;
+                        state ^= state >> 7;
+                        state ^= state << 17;
+                        u64::from(state % 5 == 0)
+                    })
+                    .collect();
+                let mut packed = vec![0u64; words * h];
+                for y in 0..h {
+                    for x in 0..w {
+                        packed[y * words + x / 64] |= pixels[y * w + x] << (x % 64);
+                    }
+                }
+                or_3x3_bits(&packed, w, words, h, &mut tmp, &mut dst);
+                let expected = reference(&pixels, w, h);
+                for y in 0..h {
+                    for x in 0..w {
+                        assert_eq!(
+                            dst[y * words + x / 64] >> (x % 64) & 1,
+                            expected[y * w + x],
+                            "{w}x{h} at ({x}, {y})"
+                        );
+                    }
+                    // The bits beyond the row's pixels stay clear.
+                    let tail = if w % 64 == 0 { 0 } else { dst[y * words + words - 1] >> (w % 64) };
+                    assert_eq!(tail, 0, "{w}x{h} row {y}");
+                }
             }
         }
     }

@@ -340,7 +340,7 @@ impl Samples {
         let mut workspace = SampleWorkspace::default();
         Self::check_one(problem, readback, light_index, &mut workspace)?;
         let mut all = [Self::empty(problem)];
-        extract(&mut all, &mut workspace, options);
+        extract(&mut all, &mut workspace, readback, options);
         let [samples] = all;
         Ok(samples)
     }
@@ -361,7 +361,7 @@ impl Samples {
     ) -> Result<()> {
         Self::check_one(problem, readback, light_index, workspace)?;
         self.reset(problem);
-        extract(std::slice::from_mut(self), workspace, options);
+        extract(std::slice::from_mut(self), workspace, readback, options);
         Ok(())
     }
 
@@ -447,7 +447,7 @@ impl Samples {
             }
             out.extend(problems[reused..].iter().map(Self::empty));
         }
-        extract(out, workspace, options);
+        extract(out, workspace, readback, options);
         Ok(())
     }
 }
