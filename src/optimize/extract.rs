@@ -23,6 +23,8 @@ pub struct SampleWorkspace {
     pub(super) bits: Vec<u32>,
     /// Per pixel column: its screen x and that x's term of the unprojection.
     columns: Vec<(f64, DVec4)>,
+    /// Several lights: the active pixels of each band of rows.
+    bands: Vec<Band>,
 }
 
 impl SampleWorkspace {
@@ -432,7 +434,7 @@ pub(super) fn extract(
     readback: &Readback<'_>,
     options: &SampleOptions,
 ) {
-    let SampleWorkspace { grid, classes, bits, columns } = workspace;
+    let SampleWorkspace { grid, classes, bits, columns, bands } = workspace;
     let grid = &*grid;
     let pixels = grid.pixels(readback);
     let (w, h) = (grid.width, grid.height);
@@ -480,29 +482,33 @@ pub(super) fn extract(
     // the eye made once rather than per boundary pixel: the same bits).
     let viewer =
         if camera.is_orthographic() { Viewer::Direction(-camera.view_direction()) } else { Viewer::Eye(camera.eye()) };
-    // The work at one covered pixel with an active slot (shadowed or at a
-    // shadow boundary), in pixel order: its relevant samples, and its
-    // boundary samples for the slots in `mixed_bits`.
-    let visit = |all: &mut [Samples],
-                 first: usize,
-                 (x, y): (usize, usize),
-                 (sx, sy): (f64, f64),
-                 row: DVec4,
-                 column: DVec4,
-                 shadowed_bits: u32,
-                 mixed_bits: u32| {
-        let active = shadowed_bits | mixed_bits;
+    // The light-independent work at one covered pixel with an active slot
+    // (shadowed or at a shadow boundary): its world point, and its surface
+    // derivatives when some slot has a boundary there (`mixed`); `None`
+    // where the point is not finite or behind the eye.
+    let point_at = |(x, y): (usize, usize), (sx, sy): (f64, f64), row: DVec4, column: DVec4, mixed: bool| {
         let d = pixels.depth(pixels.index(x, y));
         let here = unproject(column, row, d);
         if !(here.w > 0.0) || !here.is_finite() {
+            return None;
+        }
+        let world = here.truncate() / here.w;
+        let surface = mixed.then(|| {
+            surface_at(&pixels, &world_from_screen, viewer, options, (x, y), (sx, sy, d), here, world, step, &depth_at)
+        });
+        Some(Point { here, world, surface: surface.flatten() })
+    };
+    // The per-light work at that pixel, in pixel order: the relevant
+    // samples of the slots shadowed or at a boundary there, and the boundary
+    // samples of the slots in `mixed_bits` (`all` is the slots from `first`).
+    let emit = |all: &mut [Samples], first: usize, point: &Option<Point>, shadowed_bits: u32, mixed_bits: u32| {
+        let active = shadowed_bits | mixed_bits;
+        let Some(Point { here, world, surface }) = *point else {
             for bit in set_bits(active) {
                 all[bit - first].counts.rejected_invalid += 1;
             }
             return;
-        }
-        let world = here.truncate() / here.w;
-        // Light-independent surface derivatives, computed on first use.
-        let mut surface: Option<Option<Surface>> = None;
+        };
         for bit in set_bits(active) {
             let samples = &mut all[bit - first];
             let rows = &rows[bit];
@@ -513,21 +519,7 @@ pub(super) fn extract(
                 continue;
             }
             samples.counts.boundary_candidates += 1;
-            let found = *surface.get_or_insert_with(|| {
-                surface_at(
-                    &pixels,
-                    &world_from_screen,
-                    viewer,
-                    options,
-                    (x, y),
-                    (sx, sy, d),
-                    here,
-                    world,
-                    step,
-                    &depth_at,
-                )
-            });
-            let Some(found) = found else {
+            let Some(found) = surface else {
                 samples.counts.rejected_discontinuity += 1;
                 continue;
             };
@@ -580,7 +572,8 @@ pub(super) fn extract(
                     let x = 64 * k + j as usize;
                     let (sx, column) = columns[x];
                     let (s, b) = ((shadow >> j) as u32 & 1, (mixed >> j) as u32 & 1);
-                    visit(all, 0, (x, y), (sx, sy), row, column, s, b);
+                    let point = point_at((x, y), (sx, sy), row, column, b != 0);
+                    emit(all, 0, &point, s, b);
                 }
             }
         }
@@ -588,79 +581,140 @@ pub(super) fn extract(
         all[0].counts.shadowed += shadowed;
         return;
     }
+    // Several lights: first the light-independent work of every pixel
+    // active for some light (its world point and surface), in bands of
+    // rows (one per thread with rayon), into `bands`; then each light's
+    // samples from those pixels, in pixel order (with rayon, the lights
+    // split between threads). So each pixel is unprojected once, whatever
+    // the number of threads, and each light's lists are those of a single
+    // pass.
+    let band_count = {
+        #[cfg(feature = "rayon")]
+        {
+            (2 * rayon::current_num_threads()).clamp(1, h)
+        }
+        #[cfg(not(feature = "rayon"))]
+        {
+            1
+        }
+    };
+    let band_rows = h.div_ceil(band_count);
+    bands.resize_with(h.div_ceil(band_rows), Band::default);
+    let collect = |(b, band): (usize, &mut Band)| {
+        band.active.clear();
+        band.covered = 0;
+        for y in b * band_rows..((b + 1) * band_rows).min(h) {
+            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
+            let row = m.y_axis * sy;
+            for (x, &(sx, column)) in columns.iter().enumerate() {
+                let (valid, shadowed, mixed) = classes.at(y * w + x);
+                if !valid {
+                    continue;
+                }
+                band.covered += 1;
+                if shadowed | mixed == 0 {
+                    continue;
+                }
+                let point = point_at((x, y), (sx, sy), row, column, mixed != 0);
+                band.active.push(Active { shadowed, mixed, point });
+            }
+        }
+    };
     // The slots `first..first + all.len()` (all of them, or one thread's
-    // share): each light's samples in pixel order, whichever share it is in.
-    let scan = |all: &mut [Samples], first: usize| {
+    // share) from the bands' active pixels.
+    let scan = |all: &mut [Samples], first: usize, bands: &[Band]| {
         // Slots beyond `all` (none from the callers) are ignored.
         let slots = if all.len() >= 32 { u32::MAX } else { ((1u32 << all.len()) - 1) << first };
-        // Counted here and added at the end: the counts are the same, without
-        // a loop over every light at every pixel.
-        let mut covered = 0usize;
-        let mut shadowed = [0usize; 32];
-        // Counts first; for a fresh `Samples` (no capacity yet) also its
-        // lists' exact sizes (reused samples have grown to fit already, and
-        // counting every light's relevant pixels costs a loop over the set
-        // bits).
+        let active = || bands.iter().flat_map(|band| &band.active);
+        // A fresh `Samples` (no capacity yet) gets its lists' exact sizes
+        // first (reused samples have grown to fit already, and counting
+        // costs a loop over the set bits).
         let fresh = all
             .iter()
             .enumerate()
             .fold(0u32, |fresh, (k, samples)| fresh | u32::from(samples.relevant.capacity() == 0) << (first + k))
             & slots;
-        let (mut mixed_only, mut boundary) = ([0usize; 32], [0usize; 32]);
-        for i in 0..n {
-            let (valid, shadowed_bits, mixed_bits) = classes.at(i);
-            if !valid {
+        if fresh != 0 {
+            let (mut relevant, mut boundary) = ([0usize; 32], [0usize; 32]);
+            for pixel in active().filter(|pixel| pixel.point.is_some()) {
+                for bit in set_bits((pixel.shadowed | pixel.mixed) & fresh) {
+                    relevant[bit] += 1;
+                }
+                for bit in set_bits(pixel.mixed & fresh) {
+                    boundary[bit] += 1;
+                }
+            }
+            for bit in set_bits(fresh) {
+                let samples = &mut all[bit - first];
+                samples.relevant.reserve_exact(relevant[bit]);
+                samples.relevant_world.reserve_exact(relevant[bit]);
+                samples.boundary.reserve_exact(boundary[bit]);
+                samples.boundary_world.reserve_exact(boundary[bit]);
+            }
+        }
+        // Counted here and added at the end: the counts are the same, without
+        // a loop over every light at every pixel.
+        let mut shadowed = [0usize; 32];
+        for pixel in active() {
+            let (shadowed_bits, mixed_bits) = (pixel.shadowed & slots, pixel.mixed & slots);
+            if shadowed_bits | mixed_bits == 0 {
                 continue;
             }
-            let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-            covered += 1;
             for bit in set_bits(shadowed_bits) {
                 shadowed[bit] += 1;
             }
-            for bit in set_bits(mixed_bits & fresh) {
-                boundary[bit] += 1;
-                mixed_only[bit] += usize::from(shadowed_bits >> bit & 1 == 0);
-            }
+            emit(all, first, &pixel.point, shadowed_bits, mixed_bits);
         }
-        for bit in set_bits(fresh) {
-            let samples = &mut all[bit - first];
-            let relevant = shadowed[bit] + mixed_only[bit];
-            samples.relevant.reserve_exact(relevant);
-            samples.relevant_world.reserve_exact(relevant);
-            samples.boundary.reserve_exact(boundary[bit]);
-            samples.boundary_world.reserve_exact(boundary[bit]);
-        }
-        for y in 0..h {
-            let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
-            let row = m.y_axis * sy;
-            for (x, &(sx, column)) in columns.iter().enumerate() {
-                let (valid, shadowed_bits, mixed_bits) = classes.at(y * w + x);
-                let (shadowed_bits, mixed_bits) = (shadowed_bits & slots, mixed_bits & slots);
-                if !valid || shadowed_bits | mixed_bits == 0 {
-                    continue;
-                }
-                visit(all, first, (x, y), (sx, sy), row, column, shadowed_bits, mixed_bits);
-            }
-        }
+        let covered: usize = bands.iter().map(|band| band.covered).sum();
         for (samples, &shadowed) in all.iter_mut().zip(&shadowed[first..]) {
             samples.counts.covered += covered;
             samples.counts.shadowed += shadowed;
         }
     };
-    // With rayon, several lights' per-light work (their relevant and
-    // boundary samples) split between threads by light; each share scans
-    // the shared classes itself, so the lists are the same.
     #[cfg(feature = "rayon")]
     {
+        use rayon::prelude::*;
+        bands.par_iter_mut().enumerate().for_each(collect);
+        let bands = &*bands;
         let threads = rayon::current_num_threads().min(all.len());
         if threads > 1 {
-            use rayon::prelude::*;
             let chunk = all.len().div_ceil(threads);
-            all.par_chunks_mut(chunk).enumerate().for_each(|(c, part)| scan(part, c * chunk));
+            all.par_chunks_mut(chunk).enumerate().for_each(|(c, part)| scan(part, c * chunk, bands));
             return;
         }
+        scan(all, 0, bands);
     }
-    scan(all, 0);
+    #[cfg(not(feature = "rayon"))]
+    {
+        bands.iter_mut().enumerate().for_each(collect);
+        scan(all, 0, bands);
+    }
+}
+
+/// A pixel active for some light, with its light-independent work.
+#[derive(Clone, Copy, Debug)]
+struct Active {
+    /// Slots shadowed there.
+    shadowed: u32,
+    /// Slots with a shadow boundary there.
+    mixed: u32,
+    point: Option<Point>,
+}
+
+/// A pixel's world point (homogeneous, `w > 0`, and dehomogenised) and, at a
+/// shadow boundary, its surface (`None` at a depth discontinuity).
+#[derive(Clone, Copy, Debug)]
+struct Point {
+    here: DVec4,
+    world: DVec3,
+    surface: Option<Surface>,
+}
+
+/// A band of rows' active pixels, in pixel order, and its covered pixels.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Band {
+    active: Vec<Active>,
+    covered: usize,
 }
 
 /// Where the camera is seen from a surface point ([`crate::Camera::towards_viewer`]).
@@ -694,7 +748,7 @@ fn set_bits(mut mask: u32) -> impl Iterator<Item = usize> {
 
 /// A boundary pixel's surface: world tangents from a read-back normal, or
 /// homogeneous derivatives from depth differences.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 enum Surface {
     Given { tx: DVec3, ty: DVec3, normal: DVec3 },
     Depth { dx4: DVec4, dy4: DVec4, normal: DVec3 },
