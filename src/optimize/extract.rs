@@ -266,33 +266,23 @@ pub(super) fn check_readback(readback: &Readback<'_>) -> Result<()> {
     Ok(())
 }
 
-/// OR of `src` over each pixel's 3x3 neighbourhood (clamped at the edges),
-/// separably, into `dst` (`tmp` is scratch).
-fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
-    src: &[T],
-    w: usize,
-    h: usize,
-    tmp: &mut Vec<T>,
-    dst: &mut Vec<T>,
-) {
-    tmp.clear();
-    tmp.resize(src.len(), T::default());
-    for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
-        if w < 3 {
-            for x in 0..w {
-                t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
-            }
-            continue;
+/// Each item of row `s` ORed with its left and right neighbours (clamped at
+/// the edges), into `t`.
+fn or_row<T: Copy + std::ops::BitOr<Output = T>>(s: &[T], t: &mut [T]) {
+    let w = s.len();
+    if w < 3 {
+        for x in 0..w {
+            t[x] = s[x.saturating_sub(1)] | s[x] | s[(x + 1).min(w - 1)];
         }
-        // The edges clamped, the interior as three shifted slices (no
-        // index arithmetic per pixel, so it vectorizes).
-        t[0] = s[0] | s[1];
-        t[w - 1] = s[w - 2] | s[w - 1];
-        for (((t, &l), &c), &r) in t[1..w - 1].iter_mut().zip(&s[..w - 2]).zip(&s[1..w - 1]).zip(&s[2..]) {
-            *t = l | c | r;
-        }
+        return;
     }
-    or_rows(tmp, w, h, dst);
+    // The edges clamped, the interior as three shifted slices (no index
+    // arithmetic per pixel, so it vectorizes).
+    t[0] = s[0] | s[1];
+    t[w - 1] = s[w - 2] | s[w - 1];
+    for (((t, &l), &c), &r) in t[1..w - 1].iter_mut().zip(&s[..w - 2]).zip(&s[1..w - 1]).zip(&s[2..]) {
+        *t = l | c | r;
+    }
 }
 
 /// Each row of `src` (`h` rows of `w` items) ORed with the rows above and
@@ -354,13 +344,16 @@ struct Classes {
     lit: Vec<u64>,
     near_lit: Vec<u64>,
     tmp_bits: Vec<u64>,
+    /// Several lights: per pixel, shadowed slots (low half) and lit slots
+    /// (high half).
     class64: Vec<u64>,
-    near64: Vec<u64>,
-    tmp64: Vec<u64>,
+    /// Several lights: `class64` ORed along rows (see [`or_row`]); the 3x3
+    /// OR is this row's and its neighbours' OR ([`Classes::row`]).
+    hor64: Vec<u64>,
 }
 
 impl Classes {
-    fn fill(&mut self, pixels: &Pixels<'_>, bits: &[u32]) {
+    fn fill(&mut self, pixels: &Pixels<'_>, bits: &[u32], band_rows: usize) {
         let (w, h) = (pixels.width, pixels.height);
         if let [bit] = *bits {
             self.one = true;
@@ -387,41 +380,61 @@ impl Classes {
             return;
         }
         self.one = false;
-        self.class64.clear();
-        self.class64.reserve_exact(w * h);
-        let class64 = &mut self.class64;
-        if bits.iter().enumerate().all(|(k, &bit)| bit as usize == k) {
-            // Slot `k` is bit `k` (what every caller passes): the classes
-            // are the masked bits and their complement, without a loop.
-            let mask = if bits.len() >= 32 { u32::MAX } else { (1u32 << bits.len()) - 1 };
-            for y in 0..h {
-                pixels.row_pixels(y, |valid, b| {
-                    class64.push(if valid { u64::from(b & mask) | u64::from(!b & mask) << 32 } else { 0 });
-                });
-            }
-        } else {
-            for y in 0..h {
-                pixels.row_pixels(y, |valid, b| {
-                    class64.push(if valid {
-                        bits.iter()
-                            .enumerate()
-                            .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) })
-                    } else {
-                        0
-                    });
-                });
-            }
+        for buffer in [&mut self.class64, &mut self.hor64] {
+            buffer.clear();
+            buffer.resize(w * h, 0);
         }
-        or_3x3(&self.class64, w, h, &mut self.tmp64, &mut self.near64);
+        // In bands of `band_rows` rows (in parallel with rayon): a row's
+        // classes and their OR along the row depend on that row only.
+        let fill = |(band, (class, hor)): (usize, (&mut [u64], &mut [u64]))| {
+            fill_classes(pixels, bits, band * band_rows, class, hor);
+        };
+        #[cfg(feature = "rayon")]
+        {
+            use rayon::prelude::*;
+            self.class64
+                .par_chunks_mut(band_rows * w)
+                .zip(self.hor64.par_chunks_mut(band_rows * w))
+                .enumerate()
+                .for_each(fill);
+        }
+        #[cfg(not(feature = "rayon"))]
+        self.class64.chunks_mut(band_rows * w).zip(self.hor64.chunks_mut(band_rows * w)).enumerate().for_each(fill);
     }
 
-    /// Several lights: whether pixel `i` (top-down) is covered, the slots
-    /// shadowed there, and the slots with a shadow boundary there.
+    /// Several lights: row `y`'s classes, and for each of its pixels the OR
+    /// of the classes over its 3x3 neighbourhood (clamped at the edges).
     #[inline]
-    fn at(&self, i: usize) -> (bool, u32, u32) {
-        let (class, near) = (self.class64[i], self.near64[i]);
-        // A covered pixel is shadowed or lit for every slot (there is one at least).
-        (class != 0, class as u32, near as u32 & (near >> 32) as u32)
+    fn row(&self, y: usize, w: usize, h: usize) -> (&[u64], impl Iterator<Item = u64> + '_) {
+        let row = |y: usize| &self.hor64[y * w..][..w];
+        let (above, here, below) = (row(y.saturating_sub(1)), row(y), row((y + 1).min(h - 1)));
+        let near = above.iter().zip(here).zip(below).map(|((&a, &m), &b)| a | m | b);
+        (&self.class64[y * w..][..w], near)
+    }
+}
+
+/// Several lights' classes (see [`Classes`]) of the rows from `y0`, into
+/// `class` (whole rows) and their OR along each row into `hor`.
+fn fill_classes(pixels: &Pixels<'_>, bits: &[u32], y0: usize, class: &mut [u64], hor: &mut [u64]) {
+    let w = pixels.width;
+    // Slot `k` is bit `k` (what every caller passes): the classes are the
+    // masked bits and their complement, without a loop.
+    let identity = bits.iter().enumerate().all(|(k, &bit)| bit as usize == k);
+    let mask = if bits.len() >= 32 { u32::MAX } else { (1u32 << bits.len()) - 1 };
+    for (dy, (class, hor)) in class.chunks_exact_mut(w).zip(hor.chunks_exact_mut(w)).enumerate() {
+        let mut cells = class.iter_mut();
+        pixels.row_pixels(y0 + dy, |valid, b| {
+            let cell = cells.next().expect("a cell per pixel");
+            *cell = match (valid, identity) {
+                (false, _) => 0,
+                (true, true) => u64::from(b & mask) | u64::from(!b & mask) << 32,
+                (true, false) => bits
+                    .iter()
+                    .enumerate()
+                    .fold(0u64, |c, (k, &bit)| c | if b >> bit & 1 != 0 { 1 << k } else { 1 << (k + 32) }),
+            };
+        });
+        or_row(class, hor);
     }
 }
 
@@ -476,7 +489,20 @@ pub(super) fn extract(
         *rows = samples.frame.light_from_world_3x4_rows();
     }
     let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
-    classes.fill(&pixels, bits);
+    // Several lights are worked in bands of rows (one per thread with rayon,
+    // twice as many for balance).
+    let band_count = {
+        #[cfg(feature = "rayon")]
+        {
+            (2 * rayon::current_num_threads()).clamp(1, h)
+        }
+        #[cfg(not(feature = "rayon"))]
+        {
+            1
+        }
+    };
+    let band_rows = h.div_ceil(band_count);
+    classes.fill(&pixels, bits, band_rows);
     let classes = &*classes;
     // The camera's side of every surface (`Camera::towards_viewer`, with
     // the eye made once rather than per boundary pixel: the same bits).
@@ -588,17 +614,6 @@ pub(super) fn extract(
     // split between threads). So each pixel is unprojected once, whatever
     // the number of threads, and each light's lists are those of a single
     // pass.
-    let band_count = {
-        #[cfg(feature = "rayon")]
-        {
-            (2 * rayon::current_num_threads()).clamp(1, h)
-        }
-        #[cfg(not(feature = "rayon"))]
-        {
-            1
-        }
-    };
-    let band_rows = h.div_ceil(band_count);
     bands.resize_with(h.div_ceil(band_rows), Band::default);
     let collect = |(b, band): (usize, &mut Band)| {
         band.active.clear();
@@ -606,11 +621,14 @@ pub(super) fn extract(
         for y in b * band_rows..((b + 1) * band_rows).min(h) {
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let row = m.y_axis * sy;
-            for (x, &(sx, column)) in columns.iter().enumerate() {
-                let (valid, shadowed, mixed) = classes.at(y * w + x);
-                if !valid {
+            let (class, near) = classes.row(y, w, h);
+            for ((x, &(sx, column)), (&class, near)) in columns.iter().enumerate().zip(class.iter().zip(near)) {
+                // A covered pixel is shadowed or lit for every slot (there is
+                // one at least).
+                if class == 0 {
                     continue;
                 }
+                let (shadowed, mixed) = (class as u32, near as u32 & (near >> 32) as u32);
                 band.covered += 1;
                 if shadowed | mixed == 0 {
                     continue;
@@ -855,7 +873,23 @@ pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) ->
 
 #[cfg(test)]
 mod tests {
-    use super::{or_3x3, or_3x3_bits, pack_bytes};
+    use super::{or_3x3_bits, or_row, or_rows, pack_bytes};
+
+    /// The 3x3 OR as the extraction makes it: along rows, then across.
+    fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
+        src: &[T],
+        w: usize,
+        h: usize,
+        tmp: &mut Vec<T>,
+        dst: &mut Vec<T>,
+    ) {
+        tmp.clear();
+        tmp.resize(src.len(), T::default());
+        for (s, t) in src.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+            or_row(s, t);
+        }
+        or_rows(tmp, w, h, dst);
+    }
 
     #[test]
     fn pack_bytes_puts_byte_i_on_bit_i() {
