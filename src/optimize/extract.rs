@@ -6,7 +6,7 @@
 //! The buffers live in a [`SampleWorkspace`] so that an engine extracting
 //! every analysis frame reuses them ([`Samples::from_readback_all_into`]).
 
-use glam::{DVec3, DVec4};
+use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::samples::{PixelRect, Readback, ReadbackDepth, RowOrder, SampleOptions, Samples};
 use crate::error::{LixelError, Result};
@@ -459,24 +459,7 @@ pub(super) fn extract(
     let camera = *all[0].problem.camera();
     let world_from_screen = camera.screen_from_world().inverse();
     let step = grid.step;
-    // Lixel depth, non-finite where nothing was drawn (see `Grid`).
-    let depth_at = |x: usize, y: usize| -> Option<f64> {
-        let d = pixels.depth(pixels.index(x, y));
-        d.is_finite().then_some(d)
-    };
-    // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0:
-    // `world_from_screen * [sx, sy, d, 1]` summed in glam's order (x, y, z,
-    // w columns), with the column's and the row's terms made once each
-    // (the same products, so the same bits; `w_axis * 1.0` is `w_axis`).
     let m = world_from_screen;
-    let unproject = |column: DVec4, row: DVec4, d: f64| -> DVec4 {
-        let v = column + row + m.z_axis * d + m.w_axis;
-        if v.w < 0.0 {
-            -v
-        } else {
-            v
-        }
-    };
     columns.clear();
     columns.extend((0..w).map(|x| {
         let sx = grid.origin.x + (x as f64 + 0.5) * step.x;
@@ -488,7 +471,6 @@ pub(super) fn extract(
     for (rows, samples) in rows.iter_mut().zip(all.iter()) {
         *rows = samples.frame.light_from_world_3x4_rows();
     }
-    let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
     // Several lights are worked in bands of rows (one per thread with rayon,
     // twice as many for balance).
     let band_count = {
@@ -508,64 +490,7 @@ pub(super) fn extract(
     // the eye made once rather than per boundary pixel: the same bits).
     let viewer =
         if camera.is_orthographic() { Viewer::Direction(-camera.view_direction()) } else { Viewer::Eye(camera.eye()) };
-    // The light-independent work at one covered pixel with an active slot
-    // (shadowed or at a shadow boundary): its world point, and its surface
-    // derivatives when some slot has a boundary there (`mixed`); `None`
-    // where the point is not finite or behind the eye.
-    let point_at = |(x, y): (usize, usize), (sx, sy): (f64, f64), row: DVec4, column: DVec4, mixed: bool| {
-        let d = pixels.depth(pixels.index(x, y));
-        let here = unproject(column, row, d);
-        if !(here.w > 0.0) || !here.is_finite() {
-            return None;
-        }
-        let world = here.truncate() / here.w;
-        let surface = mixed.then(|| {
-            surface_at(&pixels, &world_from_screen, viewer, options, (x, y), (sx, sy, d), here, world, step, &depth_at)
-        });
-        Some(Point { here, world, surface: surface.flatten() })
-    };
-    // The per-light work at that pixel, in pixel order: the relevant
-    // samples of the slots shadowed or at a boundary there, and the boundary
-    // samples of the slots in `mixed_bits` (`all` is the slots from `first`).
-    let emit = |all: &mut [Samples], first: usize, point: &Option<Point>, shadowed_bits: u32, mixed_bits: u32| {
-        let active = shadowed_bits | mixed_bits;
-        let Some(Point { here, world, surface }) = *point else {
-            for bit in set_bits(active) {
-                all[bit - first].counts.rejected_invalid += 1;
-            }
-            return;
-        };
-        for bit in set_bits(active) {
-            let samples = &mut all[bit - first];
-            let rows = &rows[bit];
-            let x_light = to_light(rows, here);
-            samples.relevant.push(x_light);
-            samples.relevant_world.push(world);
-            if mixed_bits >> bit & 1 == 0 {
-                continue;
-            }
-            samples.counts.boundary_candidates += 1;
-            let Some(found) = surface else {
-                samples.counts.rejected_discontinuity += 1;
-                continue;
-            };
-            let sample = match found {
-                Surface::Given { tx, ty, .. } => {
-                    let along = |t: DVec3| to_light(rows, t.extend(0.0));
-                    BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
-                }
-                Surface::Depth { dx4, dy4, .. } => {
-                    BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
-                }
-            };
-            if !faces_light(samples.problem.light(), world, found.normal(), options.min_light_cosine) {
-                samples.counts.rejected_back_facing += 1;
-                continue;
-            }
-            samples.boundary.push(sample);
-            samples.boundary_world.push(world);
-        }
-    };
+    let work = PixelWork { pixels, world_from_screen, viewer, options, step, rows };
     if classes.one {
         // One light: its classes as bit images, so that runs without an
         // active pixel cost a few instructions per 64 pixels; then only the
@@ -598,8 +523,8 @@ pub(super) fn extract(
                     let x = 64 * k + j as usize;
                     let (sx, column) = columns[x];
                     let (s, b) = ((shadow >> j) as u32 & 1, (mixed >> j) as u32 & 1);
-                    let point = point_at((x, y), (sx, sy), row, column, b != 0);
-                    emit(all, 0, &point, s, b);
+                    let point = work.point_at((x, y), (sx, sy), row, column, b != 0);
+                    work.emit(all, 0, &point, s, b);
                 }
             }
         }
@@ -633,7 +558,7 @@ pub(super) fn extract(
                 if shadowed | mixed == 0 {
                     continue;
                 }
-                let point = point_at((x, y), (sx, sy), row, column, mixed != 0);
+                let point = work.point_at((x, y), (sx, sy), row, column, mixed != 0);
                 band.active.push(Active { shadowed, mixed, point });
             }
         }
@@ -681,7 +606,7 @@ pub(super) fn extract(
             for bit in set_bits(shadowed_bits) {
                 shadowed[bit] += 1;
             }
-            emit(all, first, &pixel.point, shadowed_bits, mixed_bits);
+            work.emit(all, first, &pixel.point, shadowed_bits, mixed_bits);
         }
         let covered: usize = bands.iter().map(|band| band.covered).sum();
         for (samples, &shadowed) in all.iter_mut().zip(&shadowed[first..]) {
@@ -706,6 +631,109 @@ pub(super) fn extract(
     {
         bands.iter_mut().enumerate().for_each(collect);
         scan(all, 0, bands);
+    }
+}
+
+/// What the work at a pixel needs: the readback, the unprojection, each
+/// light's `X~ = T [x; w]` rows (made once rather than per pixel:
+/// `LightFrame::homogeneous4` rebuilds them on every call).
+struct PixelWork<'a> {
+    pixels: Pixels<'a>,
+    world_from_screen: DMat4,
+    /// The camera's side of every surface.
+    viewer: Viewer,
+    options: &'a SampleOptions,
+    /// Full-resolution pixels per readback pixel.
+    step: DVec2,
+    rows: [[DVec4; 3]; 32],
+}
+
+impl PixelWork<'_> {
+    /// The light-independent work at one covered pixel with an active slot
+    /// (shadowed or at a shadow boundary): its world point, and its surface
+    /// derivatives when some slot has a boundary there (`mixed`); `None`
+    /// where the point is not finite or behind the eye. `row` and `column`
+    /// are the pixel's terms of the unprojection.
+    #[inline(always)]
+    fn point_at(
+        &self,
+        (x, y): (usize, usize),
+        (sx, sy): (f64, f64),
+        row: DVec4,
+        column: DVec4,
+        mixed: bool,
+    ) -> Option<Point> {
+        let pixels = &self.pixels;
+        let d = pixels.depth(pixels.index(x, y));
+        // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0:
+        // `world_from_screen * [sx, sy, d, 1]` summed in glam's order (x, y,
+        // z, w columns), with the column's and the row's terms made once
+        // each (the same products, so the same bits; `w_axis * 1.0` is
+        // `w_axis`).
+        let m = &self.world_from_screen;
+        let here = column + row + m.z_axis * d + m.w_axis;
+        let here = if here.w < 0.0 { -here } else { here };
+        if !(here.w > 0.0) || !here.is_finite() {
+            return None;
+        }
+        let world = here.truncate() / here.w;
+        // Lixel depth, non-finite where nothing was drawn.
+        let depth_at = |x: usize, y: usize| -> Option<f64> {
+            let d = pixels.depth(pixels.index(x, y));
+            d.is_finite().then_some(d)
+        };
+        let surface = if mixed {
+            surface_at(pixels, m, self.viewer, self.options, (x, y), (sx, sy, d), here, world, self.step, &depth_at)
+        } else {
+            None
+        };
+        Some(Point { here, world, surface })
+    }
+
+    /// The per-light work at that pixel, in pixel order: the relevant
+    /// samples of the slots shadowed or at a boundary there, and the
+    /// boundary samples of the slots in `mixed_bits` (`all` is the slots
+    /// from `first`).
+    #[inline(always)]
+    fn emit(&self, all: &mut [Samples], first: usize, point: &Option<Point>, shadowed_bits: u32, mixed_bits: u32) {
+        let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
+        let active = shadowed_bits | mixed_bits;
+        let Some(Point { here, world, surface }) = *point else {
+            for bit in set_bits(active) {
+                all[bit - first].counts.rejected_invalid += 1;
+            }
+            return;
+        };
+        for bit in set_bits(active) {
+            let samples = &mut all[bit - first];
+            let rows = &self.rows[bit];
+            let x_light = to_light(rows, here);
+            samples.relevant.push(x_light);
+            samples.relevant_world.push(world);
+            if mixed_bits >> bit & 1 == 0 {
+                continue;
+            }
+            samples.counts.boundary_candidates += 1;
+            let Some(found) = surface else {
+                samples.counts.rejected_discontinuity += 1;
+                continue;
+            };
+            let sample = match found {
+                Surface::Given { tx, ty, .. } => {
+                    let along = |t: DVec3| to_light(rows, t.extend(0.0));
+                    BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+                }
+                Surface::Depth { dx4, dy4, .. } => {
+                    BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
+                }
+            };
+            if !faces_light(samples.problem.light(), world, found.normal(), self.options.min_light_cosine) {
+                samples.counts.rejected_back_facing += 1;
+                continue;
+            }
+            samples.boundary.push(sample);
+            samples.boundary_world.push(world);
+        }
     }
 }
 
