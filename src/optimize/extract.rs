@@ -472,11 +472,16 @@ pub(super) fn extract(
         *rows = samples.frame.light_from_world_3x4_rows();
     }
     // Several lights are worked in bands of rows (one per thread with rayon,
-    // twice as many for balance).
+    // twice as many for balance). One light does not touch rayon (its first
+    // use starts the thread pool).
     let band_count = {
         #[cfg(feature = "rayon")]
         {
-            (2 * rayon::current_num_threads()).clamp(1, h)
+            if bits.len() > 1 {
+                (2 * rayon::current_num_threads()).clamp(1, h)
+            } else {
+                1
+            }
         }
         #[cfg(not(feature = "rayon"))]
         {

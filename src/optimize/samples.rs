@@ -387,7 +387,8 @@ impl Samples {
     /// all lights (their bits share a `u32`, and a pixel's world position and
     /// surface derivatives are computed once); each light's samples equal
     /// [`Self::from_readback`]'s for its bit. With the `rayon` feature the
-    /// lights' bodies and focused matrices are computed in parallel.
+    /// lights' bodies and focused matrices, the pixels' work (in bands of
+    /// rows) and the lights' samples are computed in parallel.
     ///
     /// # Errors
     /// [`LixelError::UnusableSamples`] when the buffer sizes do not match
@@ -436,9 +437,16 @@ impl Samples {
         #[cfg(feature = "rayon")]
         {
             use rayon::prelude::*;
-            out.par_iter_mut().zip(&problems[..reused]).for_each(|(samples, problem)| samples.reset(problem));
-            let fresh: Vec<Self> = problems[reused..].par_iter().map(Self::empty).collect();
-            out.extend(fresh);
+            // One job into rayon's pool for the whole call (its parallel
+            // steps then split from a worker thread): each job sent from
+            // outside the pool takes a slot of its queue, whose blocks are
+            // allocated as it fills.
+            rayon::scope(|_| {
+                out.par_iter_mut().zip(&problems[..reused]).for_each(|(samples, problem)| samples.reset(problem));
+                let fresh: Vec<Self> = problems[reused..].par_iter().map(Self::empty).collect();
+                out.extend(fresh);
+                extract(out, workspace, readback, options);
+            });
         }
         #[cfg(not(feature = "rayon"))]
         {
@@ -446,8 +454,8 @@ impl Samples {
                 samples.reset(problem);
             }
             out.extend(problems[reused..].iter().map(Self::empty));
+            extract(out, workspace, readback, options);
         }
-        extract(out, workspace, readback, options);
         Ok(())
     }
 }
