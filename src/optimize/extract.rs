@@ -353,6 +353,8 @@ struct Classes {
 }
 
 impl Classes {
+    /// The classes of `pixels` for the light bits `bits` (slot `k` is
+    /// `bits[k]`); several lights' are filled in bands of `band_rows` rows.
     fn fill(&mut self, pixels: &Pixels<'_>, bits: &[u32], band_rows: usize) {
         let (w, h) = (pixels.width, pixels.height);
         if let [bit] = *bits {
