@@ -684,13 +684,8 @@ impl PixelWork<'_> {
             return None;
         }
         let world = here.truncate() / here.w;
-        // Lixel depth, non-finite where nothing was drawn.
-        let depth_at = |x: usize, y: usize| -> Option<f64> {
-            let d = pixels.depth(pixels.index(x, y));
-            d.is_finite().then_some(d)
-        };
         let surface = if mixed {
-            surface_at(pixels, m, self.viewer, self.options, (x, y), (sx, sy, d), here, world, self.step, &depth_at)
+            surface_at(pixels, m, self.viewer, self.options, (x, y), (sx, sy, d), here, world, self.step)
         } else {
             None
         };
@@ -828,24 +823,22 @@ fn surface_at(
     here: DVec4,
     world: DVec3,
     step: glam::DVec2,
-    depth_at: &impl Fn(usize, usize) -> Option<f64>,
 ) -> Option<Surface> {
     let (w, h) = (pixels.width, pixels.height);
-    // Depth slope along each screen axis (full-resolution units).
-    let slope = |dx: isize, dy: isize| -> Option<f64> {
-        let (x0, y0) = (x.checked_add_signed(-dx)?, y.checked_add_signed(-dy)?);
-        let (x1, y1) = (x + dx as usize, y + dy as usize);
-        if x1 >= w || y1 >= h {
+    // Depth slope from the neighbours' depths `d0` (before) and `d1`
+    // (after) along a screen axis of `step` full-resolution pixels a pixel;
+    // `None` where one is not drawn or across a discontinuity.
+    let slope = |d0: f64, d1: f64, step: f64| -> Option<f64> {
+        if !(d0.is_finite() && d1.is_finite()) {
             return None;
         }
-        let (d0, d1) = (depth_at(x0, y0)?, depth_at(x1, y1)?);
         let first = 0.5 * (d1 - d0);
         let second = d1 - 2.0 * d + d0;
-        (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon)
-            .then_some(first / if dx != 0 { step.x } else { step.y })
+        (second.abs() <= options.curvature_ratio * first.abs() + options.depth_epsilon).then_some(first / step)
     };
+    let i = pixels.index(x, y);
     let normal_given = pixels.normals.map(|normals| {
-        let [nx, ny, nz] = normals[pixels.index(x, y)];
+        let [nx, ny, nz] = normals[i];
         DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))
     });
     match normal_given.and_then(DVec3::try_normalize) {
@@ -855,7 +848,13 @@ fn surface_at(
             Some(Surface::Given { tx, ty, normal })
         }
         None => {
-            let (zx, zy) = (slope(1, 0)?, slope(0, 1)?);
+            // A row's pixels are contiguous in the readback; its neighbour
+            // rows are found by `index` (either row order).
+            if x == 0 || x + 1 >= w || y == 0 || y + 1 >= h {
+                return None;
+            }
+            let zx = slope(pixels.depth(i - 1), pixels.depth(i + 1), step.x)?;
+            let zy = slope(pixels.depth(pixels.index(x, y - 1)), pixels.depth(pixels.index(x, y + 1)), step.y)?;
             let dx4 = *world_from_screen * DVec4::new(1.0, 0.0, zx, 0.0);
             let dy4 = *world_from_screen * DVec4::new(0.0, 1.0, zy, 0.0);
             let (dx4, dy4) = if here.w < 0.0 { (-dx4, -dy4) } else { (dx4, dy4) };
