@@ -222,25 +222,38 @@ struct ViewKey {
 }
 
 impl ViewKey {
-    /// Equal cameras (every field) with bit-identical matrices, clip
-    /// distances and bounds, and the same tolerance bits.
-    fn same(&self, other: &Self) -> bool {
-        let mats = |c: &Camera| {
-            [c.view_from_world(), c.clip_from_view(), c.source_view_from_world(), c.source_clip_from_view()]
-        };
-        let mat_bits = |a: DMat4, b: DMat4| {
-            a.to_cols_array().iter().zip(b.to_cols_array().iter()).all(|(x, y)| x.to_bits() == y.to_bits())
-        };
-        let bounds = |b: &SceneBounds| {
-            [b.casters.min, b.casters.max, b.receivers.min, b.receivers.max].map(|v| v.to_array().map(f64::to_bits))
-        };
-        self.camera == other.camera
-            && mats(&self.camera).into_iter().zip(mats(&other.camera)).all(|(a, b)| mat_bits(a, b))
-            && self.camera.z_near().to_bits() == other.camera.z_near().to_bits()
-            && self.camera.z_far().to_bits() == other.camera.z_far().to_bits()
-            && bounds(&self.bounds) == bounds(&other.bounds)
-            && self.eps.to_bits() == other.eps.to_bits()
+    /// Cameras with bit-identical matrices (the engine's and the normalised
+    /// ones) and clip distances, the same viewport and conventions;
+    /// bit-identical bounds and tolerance.
+    fn same(&self, camera: &Camera, bounds: &SceneBounds, eps: f64) -> bool {
+        let (a, b) = (&self.camera, camera);
+        // The floats bit for bit, without early exits within a matrix (a
+        // hit, the case worth making cheap, compares them all anyway; the
+        // matrices were copied into arrays and compared twice before, ~750
+        // instructions a call), then the camera's other fields. Its source
+        // depth mapping is not compared: it follows from the source
+        // matrices and the conventions, and nothing cached depends on it.
+        let mat = |x: DMat4, y: DMat4| bits_eq(x.as_ref(), y.as_ref());
+        let vec = |x: DVec3, y: DVec3| bits_eq(x.as_ref(), y.as_ref());
+        let (p, q) = (&self.bounds, bounds);
+        mat(a.view_from_world(), b.view_from_world())
+            && mat(a.clip_from_view(), b.clip_from_view())
+            && mat(a.source_view_from_world(), b.source_view_from_world())
+            && mat(a.source_clip_from_view(), b.source_clip_from_view())
+            && bits_eq(&[a.z_near(), a.z_far(), self.eps], &[b.z_near(), b.z_far(), eps])
+            && vec(p.casters.min, q.casters.min)
+            && vec(p.casters.max, q.casters.max)
+            && vec(p.receivers.min, q.receivers.min)
+            && vec(p.receivers.max, q.receivers.max)
+            && a.viewport() == b.viewport()
+            && a.conventions() == b.conventions()
     }
+}
+
+/// Whether two float slices hold the same bits (`-0.0` differs from `0.0`, a
+/// NaN equals itself); no early exit, so that it vectorizes.
+fn bits_eq(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(true, |same, (x, y)| same & (x.to_bits() == y.to_bits()))
 }
 
 impl ViewCache {
@@ -254,11 +267,10 @@ impl ViewCache {
         eps: f64,
         planes: impl FnOnce(&mut Vec<Plane>),
     ) {
-        let key = ViewKey { camera: *camera, bounds: *bounds, eps };
-        if self.enabled && self.key.as_ref().is_some_and(|k| k.same(&key)) {
+        if self.enabled && self.key.as_ref().is_some_and(|k| k.same(camera, bounds, eps)) {
             return;
         }
-        self.key = Some(key);
+        self.key = Some(ViewKey { camera: *camera, bounds: *bounds, eps });
         planes(&mut self.planes);
         self.spare.extend(self.visible.take());
         self.spare.extend(self.view_body.take());
