@@ -197,6 +197,20 @@ impl ShadowProblem {
         }
     }
 
+    /// The vertices of `body` that [`Self::mappable_vertices`] leaves out
+    /// (those within [`Self::coarse_eps`] of a positional light; none for a
+    /// directional one), into `out` (cleared first): with the mappable ones
+    /// they are every vertex, so a caller holding the mappable vertices
+    /// needs only these besides for the body's depth range.
+    pub(crate) fn unmappable_vertices_into(&self, body: &ConvexPolyhedron, out: &mut Vec<DVec3>) {
+        out.clear();
+        let Some(l) = self.light.position() else {
+            return;
+        };
+        let at_light = self.coarse_eps();
+        out.extend(body.vertices().iter().copied().filter(|&p| !((p - l).length() > at_light)));
+    }
+
     /// The view frustum `V` as the six half-spaces of the camera's clip volume.
     #[must_use]
     pub fn view_planes(&self) -> Vec<Plane> {

@@ -174,11 +174,14 @@ fn place(
     points.extend_from_slice(&more);
     // Depth covers the casters of the visible receivers and all of `region`
     // (for `H`, which holds casters itself, the light included when it lies
-    // in `S`: such a map needs unclipped depth).
-    ws.put_points(more);
+    // in `S`: such a map needs unclipped depth). The depth points add to
+    // the mapped ones, which hold `region`'s mappable vertices already: only
+    // the rest of its vertices (next to the light) are passed again.
+    problem.unmappable_vertices_into(region, &mut more);
     let result = problem.with_casters(focus, ws, |casters, ws| {
-        problem.placement(frame, axis, &points, region.vertices(), Some(casters), Method::Psm, fallback).build_in(ws)
+        problem.placement(frame, axis, &points, &more, Some(casters), Method::Psm, fallback).build_in(ws)
     });
+    ws.put_points(more);
     ws.put_points(points);
     result
 }
