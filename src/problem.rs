@@ -334,6 +334,39 @@ impl ShadowProblem {
         }
     }
 
+    /// Runs `f` on [`Self::visible_receiver_body`] (the same body as
+    /// [`Self::visible_receiver_body_into`] gives). Without a light frustum
+    /// the body is lent by the workspace's camera cache, or made there on a
+    /// miss, and goes back afterwards: no copy either way. Inside `f` the
+    /// cache does not hold it, so `f` must not ask for it again (it has it).
+    pub(crate) fn with_visible_receiver_body<T>(
+        &self,
+        ws: &mut SolveWorkspace,
+        f: impl FnOnce(&ConvexPolyhedron, &mut SolveWorkspace) -> T,
+    ) -> T {
+        if matches!(self.light, Light::Spot { .. }) {
+            let mut focus = ws.take_body();
+            self.visible_receiver_body_into(&mut focus, ws);
+            let result = f(&focus, ws);
+            ws.put_body(focus);
+            return result;
+        }
+        self.prepare_view(ws);
+        let lent = match ws.view.lend_visible() {
+            Some(lent) => lent,
+            None => {
+                // As `visible_receiver_body_into` makes it.
+                let mut body = ws.view.spare_body();
+                self.receiver_body_into(&mut body, ws);
+                body.clip_all_in_place(ws.view.planes.iter(), self.eps(), &mut ws.clip);
+                ws.view.lent(body)
+            }
+        };
+        let result = f(&lent.body, ws);
+        ws.view.return_visible(lent);
+        result
+    }
+
     /// PSM's hull `H = conv(V ∪ l) ∩ S ∩ L` (for a directional light, `V`
     /// extruded towards the light).
     #[must_use]

@@ -161,6 +161,16 @@ pub(crate) struct ViewCache {
     pub(crate) psm_hull: LightEntry,
     /// Retired bodies, kept for their buffers.
     spare: Vec<ConvexPolyhedron>,
+    /// Counts the key's changes: a body lent out of the cache goes back
+    /// only under the key it was made for.
+    generation: u64,
+}
+
+/// A body lent out of the camera cache, with the key generation it was made
+/// under.
+pub(crate) struct Lent {
+    pub(crate) body: ConvexPolyhedron,
+    generation: u64,
 }
 
 /// A body that depends on the camera cache's key and on one light: kept,
@@ -271,6 +281,7 @@ impl ViewCache {
             return;
         }
         self.key = Some(ViewKey { camera: *camera, bounds: *bounds, eps });
+        self.generation = self.generation.wrapping_add(1);
         planes(&mut self.planes);
         self.spare.extend(self.visible.take());
         self.spare.extend(self.view_body.take());
@@ -289,6 +300,28 @@ impl ViewCache {
     }
 
     /// A body for a result about to be cached (buffers from a retired one).
+    /// Lends the cached `V ∩ R` (taken out of the cache, no copy), if held.
+    pub(crate) fn lend_visible(&mut self) -> Option<Lent> {
+        let generation = self.generation;
+        self.visible.take().map(|body| Lent { body, generation })
+    }
+
+    /// Takes back a body lent by [`Self::lend_visible`], or made by
+    /// [`Self::lent`] to be cached as `V ∩ R`; one whose key has changed
+    /// meanwhile, or whose place a newer body took, is kept as spare.
+    pub(crate) fn return_visible(&mut self, lent: Lent) {
+        if lent.generation == self.generation && self.visible.is_none() {
+            self.visible = Some(lent.body);
+        } else {
+            self.spare.push(lent.body);
+        }
+    }
+
+    /// `body`, made under the current key, as if lent by the cache.
+    pub(crate) fn lent(&self, body: ConvexPolyhedron) -> Lent {
+        Lent { body, generation: self.generation }
+    }
+
     pub(crate) fn spare_body(&mut self) -> ConvexPolyhedron {
         self.spare.pop().unwrap_or_default()
     }

@@ -117,11 +117,7 @@ fn classify(problem: &ShadowProblem, light: DVec4) -> PsmLightCase {
 }
 
 pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
-    let mut focus = ws.take_body();
-    problem.visible_receiver_body_into(&mut focus, ws);
-    let result = solve_for(problem, options, &focus, ws);
-    ws.put_body(focus);
-    result
+    problem.with_visible_receiver_body(ws, |focus, ws| solve_for(problem, options, focus, ws))
 }
 
 fn solve_for(
@@ -131,10 +127,10 @@ fn solve_for(
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::Psm, None, ws);
+        return super::focused::around(problem, focus, Method::Psm, None, ws);
     }
     if problem.camera().is_orthographic() {
-        return super::focused::solve_as(problem, Method::Psm, Some(Fallback::OrthographicCamera), ws);
+        return super::focused::around(problem, focus, Method::Psm, Some(Fallback::OrthographicCamera), ws);
     }
     let mut hull = ws.take_body();
     problem.psm_hull_into(&mut hull, ws);
@@ -154,7 +150,7 @@ fn solve_for(
     {
         return Ok(matrix);
     }
-    super::focused::solve_as(problem, Method::Psm, fallback, ws)
+    super::focused::around(problem, focus, Method::Psm, fallback, ws)
 }
 
 /// Map around `region` (with the visible receivers), depth over their casters.
