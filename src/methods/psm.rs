@@ -138,33 +138,53 @@ fn solve_for(
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
     // alone, and failing that use the focused map.
-    let first = psm_axis(problem, options, &hull, &frame, ws)
-        .and_then(|axis| place(problem, frame, axis, &hull, focus, None, ws).ok());
+    let first = attempt(problem, options, frame, &hull, focus, None, ws);
     ws.put_body(hull);
     if let Some(matrix) = first {
         return Ok(matrix);
     }
     let fallback = Some(Fallback::PsmHullAroundLight);
-    if let Some(matrix) = psm_axis(problem, options, focus, &frame, ws)
-        .and_then(|axis| place(problem, frame, axis, focus, focus, fallback, ws).ok())
-    {
+    if let Some(matrix) = attempt(problem, options, frame, focus, focus, fallback, ws) {
         return Ok(matrix);
     }
     super::focused::around(problem, focus, Method::Psm, fallback, ws)
 }
 
-/// Map around `region` (with the visible receivers), depth over their casters.
+/// PSM's map around `region` (with the visible receivers `focus`): its
+/// axis, then the placement; `None` where either fails. `region`'s mappable
+/// vertices are taken once for both.
+fn attempt(
+    problem: &ShadowProblem,
+    options: &PsmOptions,
+    frame: LightFrame,
+    region: &ConvexPolyhedron,
+    focus: &ConvexPolyhedron,
+    fallback: Option<Fallback>,
+    ws: &mut SolveWorkspace,
+) -> Option<LightMatrix> {
+    let mut mapped = ws.take_points();
+    problem.mappable_vertices_into(region, &mut mapped, ws);
+    let result = psm_axis(problem, options, region, &mapped, &frame, ws)
+        .and_then(|axis| place(problem, frame, axis, region, &mapped, focus, fallback, ws).ok());
+    ws.put_points(mapped);
+    result
+}
+
+/// Map around `region` (with the visible receivers), depth over their
+/// casters; `mapped` are `region`'s mappable vertices.
+#[allow(clippy::too_many_arguments)]
 fn place(
     problem: &ShadowProblem,
     frame: LightFrame,
     axis: DVec3,
     region: &ConvexPolyhedron,
+    mapped: &[DVec3],
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     let mut points = ws.take_points();
-    problem.mappable_vertices_into(region, &mut points, ws);
+    points.extend_from_slice(mapped);
     let mut more = ws.take_points();
     problem.mappable_vertices_into(focus, &mut more, ws);
     points.extend_from_slice(&more);
@@ -182,12 +202,14 @@ fn place(
     result
 }
 
-/// PSM's optical axis for `region`, in light coordinates of `frame`; `None`
-/// when the directions from the light to `region` do not fit in a cone.
+/// PSM's optical axis for `region` (`mapped`: its mappable vertices), in
+/// light coordinates of `frame`; `None` when the directions from the light
+/// to `region` do not fit in a cone.
 fn psm_axis(
     problem: &ShadowProblem,
     options: &PsmOptions,
     region: &ConvexPolyhedron,
+    mapped: &[DVec3],
     frame: &LightFrame,
     ws: &mut SolveWorkspace,
 ) -> Option<DVec3> {
@@ -197,7 +219,7 @@ fn psm_axis(
     let pps = post_perspective(problem, options, region);
     let l = pps.light;
     let mut dirs = ws.take_points();
-    problem.mappable_vertices_into(region, &mut dirs, ws);
+    dirs.extend_from_slice(mapped);
     for p in &mut dirs {
         let q = pps.clip_from_world * p.extend(1.0);
         *p = q.truncate() * l.w - l.truncate() * q.w;
