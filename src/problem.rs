@@ -494,6 +494,15 @@ impl ShadowProblem {
         ws: &mut SolveWorkspace,
         place: impl FnOnce(&CasterBounds, &mut SolveWorkspace) -> T,
     ) -> T {
+        if !focus.is_empty() {
+            // Kept for this light and body: used in place, no copy in or out.
+            let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
+            if let Some(casters) = ws.caster_bounds.lend(&key, focus) {
+                let result = place(&casters, ws);
+                ws.caster_bounds.give_back(casters);
+                return result;
+            }
+        }
         let mut casters = CasterBounds::new(ws.take_planes());
         self.caster_bounds_into(focus, &mut casters, ws);
         let result = place(&casters, ws);

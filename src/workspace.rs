@@ -343,6 +343,9 @@ pub(crate) struct CasterCache<T> {
     /// The body the casters were found for (compared bit for bit).
     focus: ConvexPolyhedron,
     casters: T,
+    /// `casters` is out on loan ([`CasterCache::lend`]): the field holds a
+    /// placeholder until it comes back.
+    lent: bool,
 }
 
 /// A cached value copied in and out reusing its buffers.
@@ -397,7 +400,7 @@ impl<T: CopyFrom> CasterCache<T> {
     /// Copies the cached casters into `out` if they were found for `key`
     /// around a body bit-equal to `focus`; returns whether they were.
     pub(crate) fn get_into(&self, key: &CasterKey, focus: &ConvexPolyhedron, out: &mut T) -> bool {
-        let hit = self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
+        let hit = self.enabled && !self.lent && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
         if hit {
             out.copy_from(&self.casters);
         }
@@ -409,7 +412,7 @@ impl<T: CopyFrom> CasterCache<T> {
     /// [`CasterBounds`]'s remembered answers) if they are the ones kept for
     /// `key` around `focus`.
     pub(crate) fn refresh(&mut self, key: &CasterKey, focus: &ConvexPolyhedron, casters: &T) {
-        if self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus) {
+        if self.enabled && !self.lent && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus) {
             self.casters.copy_from(casters);
         }
     }
@@ -421,11 +424,36 @@ impl<T: CopyFrom> CasterCache<T> {
             return;
         }
         if self.seen == Some(key) {
+            // Whatever is out on loan is superseded.
+            self.lent = false;
             self.key = Some(key);
             self.focus.copy_from(focus);
             self.casters.copy_from(casters);
         } else {
             self.seen = Some(key);
+        }
+    }
+}
+
+impl<T: Default> CasterCache<T> {
+    /// The kept casters themselves (no copy) if they were found for `key`
+    /// around a body bit-equal to `focus`: what [`Self::get_into`] would
+    /// copy. While out, the cache answers no query; hand them back (with
+    /// what was learnt about them) by [`Self::give_back`].
+    pub(crate) fn lend(&mut self, key: &CasterKey, focus: &ConvexPolyhedron) -> Option<T> {
+        let hit = self.enabled && !self.lent && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
+        hit.then(|| {
+            self.lent = true;
+            std::mem::take(&mut self.casters)
+        })
+    }
+
+    /// Takes back the casters [`Self::lend`] gave out, unless the cache
+    /// moved on meanwhile (then they are dropped).
+    pub(crate) fn give_back(&mut self, casters: T) {
+        if self.lent {
+            self.casters = casters;
+            self.lent = false;
         }
     }
 }
