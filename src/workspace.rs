@@ -472,3 +472,37 @@ pub(crate) fn with_workspace<R>(f: impl FnOnce(&mut SolveWorkspace) -> R) -> R {
     let _ = WORKSPACE.try_with(|cell| cell.set(Some(workspace)));
     result
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(x: f64) -> CasterKey {
+        let light = Light::Point { position: DVec3::new(x, 2.0, 3.0) };
+        CasterKey::new(&light, &Aabb { min: DVec3::ZERO, max: DVec3::ONE }, 1e-9)
+    }
+
+    #[test]
+    fn lent_casters_are_served_to_no_one_and_come_back() {
+        let focus = ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::ONE);
+        let kept = ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::splat(2.0));
+        let mut cache = CasterCache::<ConvexPolyhedron> { enabled: true, ..CasterCache::default() };
+        cache.store(key(1.0), &focus, &kept);
+        cache.store(key(1.0), &focus, &kept);
+        let mut out = ConvexPolyhedron::empty();
+        assert!(cache.lend(&key(2.0), &focus).is_none(), "another light");
+        let lent = cache.lend(&key(1.0), &focus).expect("kept for this light and body");
+        assert!(lent.bit_eq(&kept));
+        // While out: no copy of the placeholder, no second loan.
+        assert!(!cache.get_into(&key(1.0), &focus, &mut out));
+        assert!(cache.lend(&key(1.0), &focus).is_none());
+        cache.give_back(lent);
+        assert!(cache.get_into(&key(1.0), &focus, &mut out) && out.bit_eq(&kept));
+        // Casters stored while one is out supersede it.
+        let lent = cache.lend(&key(1.0), &focus).unwrap();
+        let newer = ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::splat(3.0));
+        cache.store(key(1.0), &focus, &newer);
+        cache.give_back(lent);
+        assert!(cache.get_into(&key(1.0), &focus, &mut out) && out.bit_eq(&newer));
+    }
+}
