@@ -299,6 +299,20 @@ mod tests {
                         let a = next() * std::f64::consts::TAU;
                         v(a.cos(), a.sin()) * (1.0 - f64::EPSILON * (k % 3) as f64)
                     }
+                    // A readback's pixels in row order through a perspective
+                    // map (the thinning's blocks are runs of a row), some
+                    // rows cut short.
+                    7 => {
+                        let (px, py) = ((k % 37) as f64, (k / 37) as f64);
+                        let w = 1.0 + 0.01 * px + 0.03 * py;
+                        v((px + 0.2 * py) / w, (py - 0.1 * px) / w)
+                    }
+                    // Non-finite points among finite ones: skipped.
+                    8 => match k % 11 {
+                        3 => v(f64::NAN, next()),
+                        7 => v(next(), f64::INFINITY),
+                        _ => v(next(), next() * 3.0),
+                    },
                     // Along a square's edges, a hair outside or inside
                     // (near-hull points right at the thinning octagon's edges).
                     _ => {
@@ -312,7 +326,7 @@ mod tests {
                     }
                 })
                 .collect();
-            let mut plain = points.clone();
+            let mut plain: Vec<DVec2> = points.iter().copied().filter(|p| p.is_finite()).collect();
             plain.sort_unstable_by(lexicographic);
             plain.dedup();
             let mut expected = Vec::new();
