@@ -300,8 +300,8 @@ mod tests {
                         v(a.cos(), a.sin()) * (1.0 - f64::EPSILON * (k % 3) as f64)
                     }
                     // A readback's pixels in row order through a perspective
-                    // map (the thinning's blocks are runs of a row), some
-                    // rows cut short.
+                    // map (the thinning's blocks are runs of a row), the
+                    // last row cut short.
                     7 => {
                         let (px, py) = ((k % 37) as f64, (k / 37) as f64);
                         let w = 1.0 + 0.01 * px + 0.03 * py;

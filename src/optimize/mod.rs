@@ -454,13 +454,13 @@ impl Optimizer {
                 report.snapped = true;
             }
         }
-        let other = other_h.map(|h| self.finish(samples, h));
         // The answer must hold every relevant sample (not only the extreme
-        // rays it was fitted to): otherwise the other matrix, else the
-        // focused one.
+        // rays it was fitted to): otherwise the other matrix (made only
+        // then), else the focused one.
         if self.holds_samples(samples, &matrix) {
             return Ok(matrix);
         }
+        let other = other_h.map(|h| self.finish(samples, h));
         if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
             report.accepted = !report.accepted;
             report.snapped = false;
