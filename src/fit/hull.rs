@@ -68,41 +68,52 @@ const AKL_TOUSSAINT_MIN_POINTS: usize = 64;
 /// many blocks are small and far inside.
 const BLOCK: usize = 16;
 
-/// `(min, max)` of `x`, `y`, `x + y` and `x − y` over `points`, in that order.
+/// `(min, max)` of `x`, `y`, `x + y` and `x − y` over `points`, in that
+/// order, and the sum of the `x + y`: not finite when a point is not (or,
+/// harmlessly, when the sum overflows).
 #[inline]
-fn block_extremes(points: &[DVec2]) -> ([f64; 4], [f64; 4]) {
+fn block_extremes(points: &[DVec2]) -> ([f64; 4], [f64; 4], f64) {
     let mut lo = [f64::INFINITY; 4];
     let mut hi = [f64::NEG_INFINITY; 4];
+    let mut sum = 0.0;
     for p in points {
         let keys = [p.x, p.y, p.x + p.y, p.x - p.y];
+        sum += keys[2];
         for k in 0..4 {
-            // A select, not `f64::min`: the points are finite, and this is a
-            // single `minsd`.
+            // Selects, not `f64::min`: one `minpd` for two keys.
             lo[k] = if keys[k] < lo[k] { keys[k] } else { lo[k] };
             hi[k] = if keys[k] > hi[k] { keys[k] } else { hi[k] };
         }
     }
-    (lo, hi)
+    (lo, hi, sum)
 }
 
-/// Akl–Toussaint: appends to `kept`, in order, every point of `points` (all
-/// finite) that is not strictly inside the octagon spanned by the extreme
-/// points in x, y, x + y and x − y (those cannot be hull vertices), in two
-/// linear passes. A point is dropped only when plain floating-point
+/// Akl–Toussaint: appends to `kept`, in order, every point of `points` that
+/// is not strictly inside the octagon spanned by the extreme points in x, y,
+/// x + y and x − y (those cannot be hull vertices), in two linear passes, and
+/// returns `true`; or returns `false`, appending nothing, when a point may
+/// not be finite. A point is dropped only when plain floating-point
 /// orientation tests put it inside every edge by a margin far above their
 /// rounding error, so hull vertices are never dropped.
 ///
 /// The inside test runs per block of [`BLOCK`] points first: the corner of
 /// the block's bounding box lowest on each edge's inside function decides for
 /// the whole block (the box is convex and the test affine), and only the
-/// edges that corner fails are tested per point.
-fn keep_possible_vertices(points: &[DVec2], kept: &mut Vec<DVec2>) {
+/// edges that corner fails are tested per point. The first pass leaves the
+/// blocks' boxes in `boxes` (`min`, `max` per block).
+fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut Vec<DVec2>) -> bool {
     // The extremes of the four keys and the first block that reaches each.
     let mut lo = [f64::INFINITY; 4];
     let mut hi = [f64::NEG_INFINITY; 4];
     let (mut lo_block, mut hi_block) = ([0; 4], [0; 4]);
+    let mut sum = 0.0;
+    boxes.clear();
+    boxes.reserve(2 * points.len().div_ceil(BLOCK));
     for (b, block) in points.chunks(BLOCK).enumerate() {
-        let (block_lo, block_hi) = block_extremes(block);
+        let (block_lo, block_hi, block_sum) = block_extremes(block);
+        sum += block_sum;
+        boxes.push(DVec2::new(block_lo[0], block_lo[1]));
+        boxes.push(DVec2::new(block_hi[0], block_hi[1]));
         for k in 0..4 {
             if block_lo[k] < lo[k] {
                 lo[k] = block_lo[k];
@@ -113,6 +124,9 @@ fn keep_possible_vertices(points: &[DVec2], kept: &mut Vec<DVec2>) {
                 hi_block[k] = b;
             }
         }
+    }
+    if !sum.is_finite() {
+        return false;
     }
     // The first point of that block with the extreme value (the same
     // expressions as `block_extremes`, so the same bits).
@@ -145,7 +159,7 @@ fn keep_possible_vertices(points: &[DVec2], kept: &mut Vec<DVec2>) {
     }
     if n < 3 {
         kept.extend_from_slice(points);
-        return;
+        return true;
     }
     // Each edge `a → b` as the line `dx·y − dy·x − c` (positive inside),
     // with a margin above its rounding error: every term is at most
@@ -165,14 +179,14 @@ fn keep_possible_vertices(points: &[DVec2], kept: &mut Vec<DVec2>) {
     let lines = &lines[..n];
     let inside = |&(dx, dy, c, margin): &(f64, f64, f64, f64), x: f64, y: f64| dx * y - dy * x - c > margin;
     let mut open = [(0.0, 0.0, 0.0, 0.0); 8];
-    for block in points.chunks(BLOCK) {
-        let (block_lo, block_hi) = block_extremes(block);
+    for (block, bounds) in points.chunks(BLOCK).zip(boxes.chunks_exact(2)) {
+        let (block_lo, block_hi) = (bounds[0], bounds[1]);
         // The edges whose inside the block's box is not in: the box's corner
         // lowest on the edge's inside function decides.
         let mut m = 0;
         for line in lines {
-            let x = if line.1 >= 0.0 { block_hi[0] } else { block_lo[0] };
-            let y = if line.0 >= 0.0 { block_lo[1] } else { block_hi[1] };
+            let x = if line.1 >= 0.0 { block_hi.x } else { block_lo.x };
+            let y = if line.0 >= 0.0 { block_lo.y } else { block_hi.y };
             if !inside(line, x, y) {
                 open[m] = *line;
                 m += 1;
@@ -188,6 +202,7 @@ fn keep_possible_vertices(points: &[DVec2], kept: &mut Vec<DVec2>) {
             }
         }
     }
+    true
 }
 
 /// Allocation-free form of [`convex_hull_2d`].
@@ -204,24 +219,14 @@ fn keep_possible_vertices(points: &[DVec2], kept: &mut Vec<DVec2>) {
 /// # Algorithm
 ///
 /// Andrew's monotone chain with exact orientation tests; `O(n log n)` time for
-/// `n` points. Inputs of more than 64 points are first thinned in `O(n)` by the
-/// Akl–Toussaint heuristic, block by block (on pixel-grid samples it leaves a
-/// few percent). See [`convex_hull_2d`].
+/// `n` points. Finite inputs of more than 64 points are first thinned in
+/// `O(n)` by the Akl–Toussaint heuristic, block by block (on pixel-grid
+/// samples it leaves a few percent). See [`convex_hull_2d`].
 pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
     scratch.clear();
-    if points.len() <= AKL_TOUSSAINT_MIN_POINTS {
+    // `hull` holds the thinning's block boxes until the chain overwrites it.
+    if points.len() <= AKL_TOUSSAINT_MIN_POINTS || !keep_possible_vertices(points, hull, scratch) {
         scratch.extend(points.iter().copied().filter(|p| p.is_finite()));
-    } else if points.iter().all(|p| p.is_finite()) {
-        keep_possible_vertices(points, scratch);
-    } else {
-        // Rare: `hull` holds the finite points until the chain overwrites it.
-        hull.clear();
-        hull.extend(points.iter().copied().filter(|p| p.is_finite()));
-        if hull.len() > AKL_TOUSSAINT_MIN_POINTS {
-            keep_possible_vertices(hull, scratch);
-        } else {
-            scratch.extend_from_slice(hull);
-        }
     }
     scratch.sort_unstable_by(lexicographic);
     scratch.dedup();
