@@ -89,7 +89,8 @@ mod tests {
             DVec4::new(0.1, -0.1, 0.2, 1.0),
         );
         let slack = 1e-9;
-        let mut points: Vec<DVec3> = (0..600).map(|_| DVec3::new(next() * 1.4, next() * 1.4, 1.0 + 0.3 * next())).collect();
+        let mut points: Vec<DVec3> =
+            (0..600).map(|_| DVec3::new(next() * 1.4, next() * 1.4, 1.0 + 0.3 * next())).collect();
         // On the edge of `h`'s map: |c.x| = (1 + slack)·c.z, give or take an ulp.
         for k in 0..40 {
             let z = DVec3::new(0.0, 0.0, 1.0 + 0.01 * f64::from(k));
@@ -100,11 +101,17 @@ mod tests {
             points.push(p);
             points.push(p + DVec3::X * f64::EPSILON * f64::from(k % 3));
         }
-        let camera = Camera::look_at(DVec3::new(0.0, 2.0, 5.0), DVec3::ZERO, DVec3::Y, 1.0, UVec2::new(64, 64), 0.1, 50.0)
-            .expect("camera");
+        let camera =
+            Camera::look_at(DVec3::new(0.0, 2.0, 5.0), DVec3::ZERO, DVec3::Y, 1.0, UVec2::new(64, 64), 0.1, 50.0)
+                .expect("camera");
         let bounds = SceneBounds::uniform(Aabb::from_corners(DVec3::splat(-3.0), DVec3::splat(3.0)));
-        let problem = ShadowProblem::new(camera, Light::directional(DVec3::new(0.3, -1.0, 0.2)), bounds, ShadowMapSize::square(256))
-            .expect("problem");
+        let problem = ShadowProblem::new(
+            camera,
+            Light::directional(DVec3::new(0.3, -1.0, 0.2)),
+            bounds,
+            ShadowMapSize::square(256),
+        )
+        .expect("problem");
         let solved = problem.solve(&Parameterization::Normal).expect("normal");
         let matrix = LightMatrix { clip_from_world: m, homography: h, ..solved };
         let (mut inside, mut outside) = (0, 0);
@@ -116,7 +123,11 @@ mod tests {
                 let covers = window.iter().all(|&p| matrix.covers(p, slack));
                 assert_eq!(covers_all(&matrix, window, slack), covers, "{window:?}");
                 if len == 1 {
-                    if scalar { inside += 1 } else { outside += 1 }
+                    if scalar {
+                        inside += 1
+                    } else {
+                        outside += 1
+                    }
                 }
             }
         }
