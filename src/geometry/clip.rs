@@ -127,13 +127,15 @@ impl ConvexPolyhedron {
         new_index.clear();
         new_index.resize(self.vertices.len(), usize::MAX);
         on_plane.clear();
-        for (i, &v) in self.vertices.iter().enumerate() {
-            if side[i] != Side::Outside {
-                new_index[i] = vertices.len();
+        // Zipped, not indexed: no bounds checks per vertex.
+        for ((&v, &s), slot) in self.vertices.iter().zip(side.iter()).zip(new_index.iter_mut()) {
+            if s != Side::Outside {
+                *slot = vertices.len();
                 vertices.push(v);
-                on_plane.push(side[i] == Side::On);
+                on_plane.push(s == Side::On);
             }
         }
+        let kept = vertices.len();
         cuts.clear();
         let along = &mut walker.targets;
         along.clear();
@@ -165,13 +167,18 @@ impl ConvexPolyhedron {
             let mut keeps_inside = false;
             // The last cut pushed, if it is the last index pushed.
             let mut last_cut = usize::MAX;
-            for (a, b) in loop_edges(loop_indices) {
-                if side[a] != Side::Outside {
-                    keeps_inside |= side[a] == Side::Inside;
+            // The edges `(a, b)` in loop order, each vertex's side looked
+            // up once (carried from `b` to the next edge's `a`).
+            let Some((&first, rest)) = loop_indices.split_first() else { continue };
+            let (mut a, mut side_a) = (first, side[first]);
+            for &b in rest.iter().chain(std::iter::once(&first)) {
+                let side_b = side[b];
+                if side_a != Side::Outside {
+                    keeps_inside |= side_a == Side::Inside;
                     indices.push(new_index[a]);
                     last_cut = usize::MAX;
                 }
-                if side[a].is_opposite(side[b]) {
+                if side_a.is_opposite(side_b) {
                     let key = (a.min(b), a.max(b));
                     let cut = match cuts.iter().find(|(k, _)| *k == key) {
                         Some(&(_, cut)) => cut,
@@ -189,6 +196,7 @@ impl ConvexPolyhedron {
                     indices.push(cut);
                     last_cut = cut;
                 }
+                (a, side_a) = (b, side_b);
             }
             // A face with nothing strictly inside lies in the cap (to within
             // eps): the cap replaces it.
@@ -253,7 +261,14 @@ impl ConvexPolyhedron {
         if simple && !dropped_inside {
             // Every kept vertex is in a kept face (it is strictly inside) and
             // so is every cut point: nothing to renumber.
-            let _ = out.finish_checks();
+            //
+            // The kept vertices are finite (every body's are: each
+            // constructor and clip checks them), so only the cut points can
+            // have overflowed: the same test as `finish_checks` without
+            // scanning the kept ones.
+            if faces.len() < 4 || !vertices[kept..].iter().all(|v| v.is_finite()) {
+                out.clear();
+            }
         } else {
             out.finish_parts(new_index);
         }
