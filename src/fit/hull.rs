@@ -21,8 +21,23 @@ pub(crate) fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
 ///
 /// Only ever applied to finite points, where `partial_cmp` is total; `-0.0` and
 /// `0.0` compare equal, so equal points end up adjacent for deduplication.
+///
+/// Plain comparisons rather than `partial_cmp(..).then_with(..)`: the same
+/// result on finite points (so the sort permutes exactly as before), in
+/// fewer instructions.
+#[inline]
 fn lexicographic(a: &DVec2, b: &DVec2) -> Ordering {
-    a.x.partial_cmp(&b.x).unwrap_or(Ordering::Equal).then_with(|| a.y.partial_cmp(&b.y).unwrap_or(Ordering::Equal))
+    if a.x < b.x {
+        Ordering::Less
+    } else if a.x > b.x {
+        Ordering::Greater
+    } else if a.y < b.y {
+        Ordering::Less
+    } else if a.y > b.y {
+        Ordering::Greater
+    } else {
+        Ordering::Equal
+    }
 }
 
 /// Convex hull of a planar point set.
@@ -234,40 +249,51 @@ pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mu
 }
 
 /// Andrew's monotone chain over points sorted lexicographically and deduplicated.
+///
+/// The chain lives in `hull` sized up front to its bound (`2n − 1` entries
+/// for `n` points) and indexed by its length `k`, so pushes and pops are
+/// index updates without capacity checks.
 fn chain(scratch: &[DVec2], hull: &mut Vec<DVec2>) {
     hull.clear();
-    if scratch.len() <= 2 {
+    let n = scratch.len();
+    if n <= 2 {
         // Zero, one or two distinct points: already their own hull, and two
         // points in lexicographic order are a valid (degenerate) CCW polygon.
         hull.extend_from_slice(scratch);
         return;
     }
+    hull.resize(2 * n, DVec2::ZERO);
+    let h = hull.as_mut_slice();
 
     // A hull vertex must make a strict left turn with its neighbours; anything
-    // that turns right or goes straight on is popped.
-    let turns_left = |hull: &[DVec2], p: DVec2| orient(hull[hull.len() - 2], hull[hull.len() - 1], p) > 0.0;
+    // that turns right or goes straight on (or whose test is not a number) is
+    // popped.
+    let turns_left = |a: DVec2, b: DVec2, p: DVec2| orient(a, b, p) > 0.0;
 
     // Lower chain, left to right.
-    for &p in scratch.iter() {
-        while hull.len() >= 2 && !turns_left(hull, p) {
-            hull.pop();
+    let mut k = 0;
+    for &p in scratch {
+        while k >= 2 && !turns_left(h[k - 2], h[k - 1], p) {
+            k -= 1;
         }
-        hull.push(p);
+        h[k] = p;
+        k += 1;
     }
 
     // Upper chain, right to left. The last point of the lower chain (the
     // rightmost point) stays; the upper chain may pop only its own vertices.
-    let lower_len = hull.len();
-    for &p in scratch.iter().rev().skip(1) {
-        while hull.len() > lower_len && !turns_left(hull, p) {
-            hull.pop();
+    let lower_len = k;
+    for &p in scratch[..n - 1].iter().rev() {
+        while k > lower_len && !turns_left(h[k - 2], h[k - 1], p) {
+            k -= 1;
         }
-        hull.push(p);
+        h[k] = p;
+        k += 1;
     }
 
     // The upper chain ends at the first (leftmost) point, which is already the
     // hull's first vertex.
-    hull.pop();
+    hull.truncate(k - 1);
 }
 
 #[cfg(test)]
