@@ -249,51 +249,40 @@ pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mu
 }
 
 /// Andrew's monotone chain over points sorted lexicographically and deduplicated.
-///
-/// The chain lives in `hull` sized up front to its bound (`2n − 1` entries
-/// for `n` points) and indexed by its length `k`, so pushes and pops are
-/// index updates without capacity checks.
 fn chain(scratch: &[DVec2], hull: &mut Vec<DVec2>) {
     hull.clear();
-    let n = scratch.len();
-    if n <= 2 {
+    if scratch.len() <= 2 {
         // Zero, one or two distinct points: already their own hull, and two
         // points in lexicographic order are a valid (degenerate) CCW polygon.
         hull.extend_from_slice(scratch);
         return;
     }
-    hull.resize(2 * n, DVec2::ZERO);
-    let h = hull.as_mut_slice();
 
     // A hull vertex must make a strict left turn with its neighbours; anything
-    // that turns right or goes straight on (or whose test is not a number) is
-    // popped.
-    let turns_left = |a: DVec2, b: DVec2, p: DVec2| orient(a, b, p) > 0.0;
+    // that turns right or goes straight on is popped.
+    let turns_left = |hull: &[DVec2], p: DVec2| orient(hull[hull.len() - 2], hull[hull.len() - 1], p) > 0.0;
 
     // Lower chain, left to right.
-    let mut k = 0;
-    for &p in scratch {
-        while k >= 2 && !turns_left(h[k - 2], h[k - 1], p) {
-            k -= 1;
+    for &p in scratch.iter() {
+        while hull.len() >= 2 && !turns_left(hull, p) {
+            hull.pop();
         }
-        h[k] = p;
-        k += 1;
+        hull.push(p);
     }
 
     // Upper chain, right to left. The last point of the lower chain (the
     // rightmost point) stays; the upper chain may pop only its own vertices.
-    let lower_len = k;
-    for &p in scratch[..n - 1].iter().rev() {
-        while k > lower_len && !turns_left(h[k - 2], h[k - 1], p) {
-            k -= 1;
+    let lower_len = hull.len();
+    for &p in scratch.iter().rev().skip(1) {
+        while hull.len() > lower_len && !turns_left(hull, p) {
+            hull.pop();
         }
-        h[k] = p;
-        k += 1;
+        hull.push(p);
     }
 
     // The upper chain ends at the first (leftmost) point, which is already the
     // hull's first vertex.
-    hull.truncate(k - 1);
+    hull.pop();
 }
 
 #[cfg(test)]
