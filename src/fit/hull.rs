@@ -19,12 +19,12 @@ pub(crate) fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
 
 /// Lexicographic order on `(x, y)`.
 ///
-/// Only ever applied to finite points, where `partial_cmp` is total; `-0.0` and
+/// Only ever applied to finite points, where the order is total; `-0.0` and
 /// `0.0` compare equal, so equal points end up adjacent for deduplication.
 ///
 /// Plain comparisons rather than `partial_cmp(..).then_with(..)`: the same
-/// result on finite points (so the sort permutes exactly as before), in
-/// fewer instructions.
+/// answer for every pair of finite points (so the sort permutes exactly as
+/// before), in fewer instructions.
 #[inline]
 fn lexicographic(a: &DVec2, b: &DVec2) -> Ordering {
     if a.x < b.x {
