@@ -19,10 +19,25 @@ pub(crate) fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
 
 /// Lexicographic order on `(x, y)`.
 ///
-/// Only ever applied to finite points, where `partial_cmp` is total; `-0.0` and
+/// Only ever applied to finite points, where the order is total; `-0.0` and
 /// `0.0` compare equal, so equal points end up adjacent for deduplication.
+///
+/// Plain comparisons rather than `partial_cmp(..).then_with(..)`: the same
+/// answer for every pair of finite points (so the sort permutes exactly as
+/// before), in fewer instructions.
+#[inline]
 fn lexicographic(a: &DVec2, b: &DVec2) -> Ordering {
-    a.x.partial_cmp(&b.x).unwrap_or(Ordering::Equal).then_with(|| a.y.partial_cmp(&b.y).unwrap_or(Ordering::Equal))
+    if a.x < b.x {
+        Ordering::Less
+    } else if a.x > b.x {
+        Ordering::Greater
+    } else if a.y < b.y {
+        Ordering::Less
+    } else if a.y > b.y {
+        Ordering::Greater
+    } else {
+        Ordering::Equal
+    }
 }
 
 /// Convex hull of a planar point set.
