@@ -204,6 +204,37 @@ pub fn pack(
     ]
 }
 
+/// Bits 30..26 of word x of a compact texel (`shaders/spsm_common.wgsl`,
+/// [`SpsmOptions::inner_edges`](super::SpsmOptions::inner_edges)): v0.y's
+/// f16 exponent all ones, which plain offsets never have.
+pub const COMPACT_MARK: u32 = 0x7c00_0000;
+
+/// Logical bits `[l, l + n)` of a compact texel's payload: the 96 bits of
+/// words x, y, z without the marker's bits 26..30 (`spsm_field_get`).
+fn compact_field(words: [u32; 3], l: u32, n: u32) -> u32 {
+    let bit = |b: u32| (words[(b / 32) as usize] >> (b % 32)) & 1;
+    (0..n).fold(0, |v, i| {
+        let logical = l + i;
+        let physical = if logical >= 26 { logical + 5 } else { logical };
+        v | bit(physical) << i
+    })
+}
+
+/// The three vertex offsets of a compact texel (11-bit fixed point over
+/// `[-4, 4)`, from logical bit 24).
+#[must_use]
+pub fn compact_offsets(words: [u32; 3]) -> [DVec2; 3] {
+    let coordinate = |l: u32| f64::from(compact_field(words, l, 11)) / 256.0 - 4.0;
+    [24, 46, 68].map(|l| DVec2::new(coordinate(l), coordinate(l + 11)))
+}
+
+/// The 8-bit inner-edge codes of a compact texel (edge k in bits
+/// 8k..8k+7; `spsm_edge_code`).
+#[must_use]
+pub fn compact_codes(words: [u32; 3]) -> u32 {
+    compact_field(words, 0, 24)
+}
+
 /// Decodes a texel at `texel`; `None` without a triangle.
 #[must_use]
 pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], code: GradientCode) -> Option<DecodedTexel> {
@@ -216,8 +247,14 @@ pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], code: GradientCod
         let y = half::f16::from_bits((w >> 16) as u16).to_f64();
         centre + DVec2::new(x, y)
     };
+    let vertices = if words[0] & COMPACT_MARK == COMPACT_MARK {
+        let offsets = compact_offsets([words[0], words[1], words[2]]);
+        offsets.map(|o| centre + o)
+    } else {
+        [vertex(words[0]), vertex(words[1]), vertex(words[2])]
+    };
     Some(DecodedTexel {
-        vertices: [vertex(words[0]), vertex(words[1]), vertex(words[2])],
+        vertices,
         depth: decode_depth(words[3] >> 16),
         gradient: decode_gradient(words[3] & 0xffff, map, code),
     })
