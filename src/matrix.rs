@@ -279,8 +279,17 @@ pub(crate) fn fit_homography(
 /// directional light it approaches.
 pub(crate) fn in_front(frame: &LightFrame, tolerances: &Tolerances, j: DVec3, xs: &[DVec3]) -> bool {
     let w = |x: &DVec3| if frame.is_orthographic() { j.dot(*x) } else { j.dot(*x) / x.length() };
-    let max_w = xs.iter().map(w).fold(0.0, f64::max);
-    max_w > 0.0 && xs.iter().all(|x| w(x) > tolerances.min_front_cosine * max_w)
+    // One pass: every `w` above the bound is the least one above it. A NaN
+    // `w` fails the test (as it fails `w > bound`); `f64::max` skips it in
+    // the largest, as before.
+    let (mut min_w, mut max_w, mut nan) = (f64::INFINITY, 0.0_f64, false);
+    for x in xs {
+        let w = w(x);
+        nan |= w.is_nan();
+        min_w = min_w.min(w);
+        max_w = max_w.max(w);
+    }
+    max_w > 0.0 && !nan && min_w > tolerances.min_front_cosine * max_w
 }
 
 /// Whether `homography` puts every light-coordinate point in front of the

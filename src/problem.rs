@@ -197,6 +197,20 @@ impl ShadowProblem {
         }
     }
 
+    /// The vertices of `body` that [`Self::mappable_vertices`] leaves out
+    /// (those within [`Self::coarse_eps`] of a positional light; none for a
+    /// directional one), into `out` (cleared first): with the mappable ones
+    /// they are every vertex, so a caller holding the mappable vertices
+    /// needs only these besides for the body's depth range.
+    pub(crate) fn unmappable_vertices_into(&self, body: &ConvexPolyhedron, out: &mut Vec<DVec3>) {
+        out.clear();
+        let Some(l) = self.light.position() else {
+            return;
+        };
+        let at_light = self.coarse_eps();
+        out.extend(body.vertices().iter().copied().filter(|&p| !((p - l).length() > at_light)));
+    }
+
     /// The view frustum `V` as the six half-spaces of the camera's clip volume.
     #[must_use]
     pub fn view_planes(&self) -> Vec<Plane> {
@@ -318,6 +332,39 @@ impl ShadowProblem {
             cached.copy_from(out);
             ws.view.visible = Some(cached);
         }
+    }
+
+    /// Runs `f` on [`Self::visible_receiver_body`] (the same body as
+    /// [`Self::visible_receiver_body_into`] gives). Without a light frustum
+    /// the body is lent by the workspace's camera cache, or made there on a
+    /// miss, and goes back afterwards: no copy either way. Inside `f` the
+    /// cache does not hold it, so `f` must not ask for it again (it has it).
+    pub(crate) fn with_visible_receiver_body<T>(
+        &self,
+        ws: &mut SolveWorkspace,
+        f: impl FnOnce(&ConvexPolyhedron, &mut SolveWorkspace) -> T,
+    ) -> T {
+        if matches!(self.light, Light::Spot { .. }) {
+            let mut focus = ws.take_body();
+            self.visible_receiver_body_into(&mut focus, ws);
+            let result = f(&focus, ws);
+            ws.put_body(focus);
+            return result;
+        }
+        self.prepare_view(ws);
+        let lent = match ws.view.lend_visible() {
+            Some(lent) => lent,
+            None => {
+                // As `visible_receiver_body_into` makes it.
+                let mut body = ws.view.spare_body();
+                self.receiver_body_into(&mut body, ws);
+                body.clip_all_in_place(ws.view.planes.iter(), self.eps(), &mut ws.clip);
+                ws.view.lent(body)
+            }
+        };
+        let result = f(&lent.body, ws);
+        ws.view.return_visible(lent);
+        result
     }
 
     /// PSM's hull `H = conv(V ∪ l) ∩ S ∩ L` (for a directional light, `V`
@@ -447,6 +494,15 @@ impl ShadowProblem {
         ws: &mut SolveWorkspace,
         place: impl FnOnce(&CasterBounds, &mut SolveWorkspace) -> T,
     ) -> T {
+        if !focus.is_empty() {
+            // Kept for this light and body: used in place, no copy in or out.
+            let key = CasterKey::new(&self.light, &self.bounds.casters, self.eps());
+            if let Some(casters) = ws.caster_bounds.lend(&key, focus) {
+                let result = place(&casters, ws);
+                ws.caster_bounds.give_back(casters);
+                return result;
+            }
+        }
         let mut casters = CasterBounds::new(ws.take_planes());
         self.caster_bounds_into(focus, &mut casters, ws);
         let result = place(&casters, ws);

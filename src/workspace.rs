@@ -161,6 +161,16 @@ pub(crate) struct ViewCache {
     pub(crate) psm_hull: LightEntry,
     /// Retired bodies, kept for their buffers.
     spare: Vec<ConvexPolyhedron>,
+    /// Counts the key's changes: a body lent out of the cache goes back
+    /// only under the key it was made for.
+    generation: u64,
+}
+
+/// A body lent out of the camera cache, with the key generation it was made
+/// under.
+pub(crate) struct Lent {
+    pub(crate) body: ConvexPolyhedron,
+    generation: u64,
 }
 
 /// A body that depends on the camera cache's key and on one light: kept,
@@ -222,25 +232,38 @@ struct ViewKey {
 }
 
 impl ViewKey {
-    /// Equal cameras (every field) with bit-identical matrices, clip
-    /// distances and bounds, and the same tolerance bits.
-    fn same(&self, other: &Self) -> bool {
-        let mats = |c: &Camera| {
-            [c.view_from_world(), c.clip_from_view(), c.source_view_from_world(), c.source_clip_from_view()]
-        };
-        let mat_bits = |a: DMat4, b: DMat4| {
-            a.to_cols_array().iter().zip(b.to_cols_array().iter()).all(|(x, y)| x.to_bits() == y.to_bits())
-        };
-        let bounds = |b: &SceneBounds| {
-            [b.casters.min, b.casters.max, b.receivers.min, b.receivers.max].map(|v| v.to_array().map(f64::to_bits))
-        };
-        self.camera == other.camera
-            && mats(&self.camera).into_iter().zip(mats(&other.camera)).all(|(a, b)| mat_bits(a, b))
-            && self.camera.z_near().to_bits() == other.camera.z_near().to_bits()
-            && self.camera.z_far().to_bits() == other.camera.z_far().to_bits()
-            && bounds(&self.bounds) == bounds(&other.bounds)
-            && self.eps.to_bits() == other.eps.to_bits()
+    /// Cameras with bit-identical matrices (the engine's and the normalised
+    /// ones) and clip distances, the same viewport and conventions;
+    /// bit-identical bounds and tolerance.
+    fn same(&self, camera: &Camera, bounds: &SceneBounds, eps: f64) -> bool {
+        let (a, b) = (&self.camera, camera);
+        // The floats bit for bit, without early exits within a matrix (a
+        // hit, the case worth making cheap, compares them all anyway; the
+        // matrices were copied into arrays and compared twice before, ~750
+        // instructions a call), then the camera's other fields. Its source
+        // depth mapping is not compared: it follows from the source
+        // matrices and the conventions, and nothing cached depends on it.
+        let mat = |x: DMat4, y: DMat4| bits_eq(x.as_ref(), y.as_ref());
+        let vec = |x: DVec3, y: DVec3| bits_eq(x.as_ref(), y.as_ref());
+        let (p, q) = (&self.bounds, bounds);
+        mat(a.view_from_world(), b.view_from_world())
+            && mat(a.clip_from_view(), b.clip_from_view())
+            && mat(a.source_view_from_world(), b.source_view_from_world())
+            && mat(a.source_clip_from_view(), b.source_clip_from_view())
+            && bits_eq(&[a.z_near(), a.z_far(), self.eps], &[b.z_near(), b.z_far(), eps])
+            && vec(p.casters.min, q.casters.min)
+            && vec(p.casters.max, q.casters.max)
+            && vec(p.receivers.min, q.receivers.min)
+            && vec(p.receivers.max, q.receivers.max)
+            && a.viewport() == b.viewport()
+            && a.conventions() == b.conventions()
     }
+}
+
+/// Whether two float slices hold the same bits (`-0.0` differs from `0.0`, a
+/// NaN equals itself); no early exit, so that it vectorizes.
+fn bits_eq(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(true, |same, (x, y)| same & (x.to_bits() == y.to_bits()))
 }
 
 impl ViewCache {
@@ -254,11 +277,11 @@ impl ViewCache {
         eps: f64,
         planes: impl FnOnce(&mut Vec<Plane>),
     ) {
-        let key = ViewKey { camera: *camera, bounds: *bounds, eps };
-        if self.enabled && self.key.as_ref().is_some_and(|k| k.same(&key)) {
+        if self.enabled && self.key.as_ref().is_some_and(|k| k.same(camera, bounds, eps)) {
             return;
         }
-        self.key = Some(key);
+        self.key = Some(ViewKey { camera: *camera, bounds: *bounds, eps });
+        self.generation = self.generation.wrapping_add(1);
         planes(&mut self.planes);
         self.spare.extend(self.visible.take());
         self.spare.extend(self.view_body.take());
@@ -277,6 +300,28 @@ impl ViewCache {
     }
 
     /// A body for a result about to be cached (buffers from a retired one).
+    /// Lends the cached `V ∩ R` (taken out of the cache, no copy), if held.
+    pub(crate) fn lend_visible(&mut self) -> Option<Lent> {
+        let generation = self.generation;
+        self.visible.take().map(|body| Lent { body, generation })
+    }
+
+    /// Takes back a body lent by [`Self::lend_visible`], or made by
+    /// [`Self::lent`] to be cached as `V ∩ R`; one whose key has changed
+    /// meanwhile, or whose place a newer body took, is kept as spare.
+    pub(crate) fn return_visible(&mut self, lent: Lent) {
+        if lent.generation == self.generation && self.visible.is_none() {
+            self.visible = Some(lent.body);
+        } else {
+            self.spare.push(lent.body);
+        }
+    }
+
+    /// `body`, made under the current key, as if lent by the cache.
+    pub(crate) fn lent(&self, body: ConvexPolyhedron) -> Lent {
+        Lent { body, generation: self.generation }
+    }
+
     pub(crate) fn spare_body(&mut self) -> ConvexPolyhedron {
         self.spare.pop().unwrap_or_default()
     }
@@ -298,6 +343,9 @@ pub(crate) struct CasterCache<T> {
     /// The body the casters were found for (compared bit for bit).
     focus: ConvexPolyhedron,
     casters: T,
+    /// `casters` is out on loan ([`CasterCache::lend`]): the field holds a
+    /// placeholder until it comes back.
+    lent: bool,
 }
 
 /// A cached value copied in and out reusing its buffers.
@@ -352,7 +400,7 @@ impl<T: CopyFrom> CasterCache<T> {
     /// Copies the cached casters into `out` if they were found for `key`
     /// around a body bit-equal to `focus`; returns whether they were.
     pub(crate) fn get_into(&self, key: &CasterKey, focus: &ConvexPolyhedron, out: &mut T) -> bool {
-        let hit = self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
+        let hit = self.enabled && !self.lent && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
         if hit {
             out.copy_from(&self.casters);
         }
@@ -364,7 +412,7 @@ impl<T: CopyFrom> CasterCache<T> {
     /// [`CasterBounds`]'s remembered answers) if they are the ones kept for
     /// `key` around `focus`.
     pub(crate) fn refresh(&mut self, key: &CasterKey, focus: &ConvexPolyhedron, casters: &T) {
-        if self.enabled && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus) {
+        if self.enabled && !self.lent && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus) {
             self.casters.copy_from(casters);
         }
     }
@@ -376,11 +424,36 @@ impl<T: CopyFrom> CasterCache<T> {
             return;
         }
         if self.seen == Some(key) {
+            // Whatever is out on loan is superseded.
+            self.lent = false;
             self.key = Some(key);
             self.focus.copy_from(focus);
             self.casters.copy_from(casters);
         } else {
             self.seen = Some(key);
+        }
+    }
+}
+
+impl<T: Default> CasterCache<T> {
+    /// The kept casters themselves (no copy) if they were found for `key`
+    /// around a body bit-equal to `focus`: what [`Self::get_into`] would
+    /// copy. While out, the cache answers no query; hand them back (with
+    /// what was learnt about them) by [`Self::give_back`].
+    pub(crate) fn lend(&mut self, key: &CasterKey, focus: &ConvexPolyhedron) -> Option<T> {
+        let hit = self.enabled && !self.lent && self.key.as_ref() == Some(key) && self.focus.bit_eq(focus);
+        hit.then(|| {
+            self.lent = true;
+            std::mem::take(&mut self.casters)
+        })
+    }
+
+    /// Takes back the casters [`Self::lend`] gave out, unless the cache
+    /// moved on meanwhile (then they are dropped).
+    pub(crate) fn give_back(&mut self, casters: T) {
+        if self.lent {
+            self.casters = casters;
+            self.lent = false;
         }
     }
 }
@@ -398,4 +471,38 @@ pub(crate) fn with_workspace<R>(f: impl FnOnce(&mut SolveWorkspace) -> R) -> R {
     // Fails only while the thread shuts down; the buffers are then dropped.
     let _ = WORKSPACE.try_with(|cell| cell.set(Some(workspace)));
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(x: f64) -> CasterKey {
+        let light = Light::Point { position: DVec3::new(x, 2.0, 3.0) };
+        CasterKey::new(&light, &Aabb { min: DVec3::ZERO, max: DVec3::ONE }, 1e-9)
+    }
+
+    #[test]
+    fn lent_casters_are_served_to_no_one_and_come_back() {
+        let focus = ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::ONE);
+        let kept = ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::splat(2.0));
+        let mut cache = CasterCache::<ConvexPolyhedron> { enabled: true, ..CasterCache::default() };
+        cache.store(key(1.0), &focus, &kept);
+        cache.store(key(1.0), &focus, &kept);
+        let mut out = ConvexPolyhedron::empty();
+        assert!(cache.lend(&key(2.0), &focus).is_none(), "another light");
+        let lent = cache.lend(&key(1.0), &focus).expect("kept for this light and body");
+        assert!(lent.bit_eq(&kept));
+        // While out: no copy of the placeholder, no second loan.
+        assert!(!cache.get_into(&key(1.0), &focus, &mut out));
+        assert!(cache.lend(&key(1.0), &focus).is_none());
+        cache.give_back(lent);
+        assert!(cache.get_into(&key(1.0), &focus, &mut out) && out.bit_eq(&kept));
+        // Casters stored while one is out supersede it.
+        let lent = cache.lend(&key(1.0), &focus).unwrap();
+        let newer = ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::splat(3.0));
+        cache.store(key(1.0), &focus, &newer);
+        cache.give_back(lent);
+        assert!(cache.get_into(&key(1.0), &focus, &mut out) && out.bit_eq(&newer));
+    }
 }

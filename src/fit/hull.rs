@@ -62,31 +62,92 @@ pub fn convex_hull_2d(points: &[DVec2]) -> Vec<DVec2> {
 /// Inputs larger than this are first thinned by the Akl–Toussaint heuristic.
 const AKL_TOUSSAINT_MIN_POINTS: usize = 64;
 
-/// Akl–Toussaint: drops the points strictly inside the octagon spanned by the
-/// extreme points in x, y, x + y and x − y (they cannot be hull vertices), in
-/// one linear pass. A point is dropped only when plain floating-point
+/// Points per block of the thinning: a block whose bounding box lies inside
+/// the octagon is dropped whole. Input points that are neighbours in order
+/// (a readback's samples, row by row) tend to be neighbours in the plane, so
+/// many blocks are small and far inside.
+const BLOCK: usize = 16;
+
+/// `(min, max)` of `x`, `y`, `x + y` and `x − y` over `points`, in that
+/// order, and the sum of the `x + y`: not finite when a point is not (or,
+/// harmlessly, when the sum overflows).
+#[inline]
+fn block_extremes(points: &[DVec2]) -> ([f64; 4], [f64; 4], f64) {
+    let mut lo = [f64::INFINITY; 4];
+    let mut hi = [f64::NEG_INFINITY; 4];
+    let mut sum = 0.0;
+    for p in points {
+        let keys = [p.x, p.y, p.x + p.y, p.x - p.y];
+        sum += keys[2];
+        for k in 0..4 {
+            // Selects, not `f64::min`: one `minpd` for two keys.
+            lo[k] = if keys[k] < lo[k] { keys[k] } else { lo[k] };
+            hi[k] = if keys[k] > hi[k] { keys[k] } else { hi[k] };
+        }
+    }
+    (lo, hi, sum)
+}
+
+/// Akl–Toussaint: appends to `kept`, in order, every point of `points` that
+/// is not strictly inside the octagon spanned by the extreme points in x, y,
+/// x + y and x − y (those cannot be hull vertices), in two linear passes, and
+/// returns `true`; or returns `false`, appending nothing, when a point may
+/// not be finite. A point is dropped only when plain floating-point
 /// orientation tests put it inside every edge by a margin far above their
 /// rounding error, so hull vertices are never dropped.
-fn discard_interior(points: &mut Vec<DVec2>) {
-    let key = |p: &DVec2, k: usize| match k {
-        0 => -p.y,
-        1 => p.x - p.y,
-        2 => p.x,
-        3 => p.x + p.y,
-        4 => p.y,
-        5 => p.y - p.x,
-        6 => -p.x,
-        _ => -p.x - p.y,
-    };
-    // Counter-clockwise: bottom, bottom-right, right, top-right, top, ...
-    let mut octagon = [points[0]; 8];
-    for p in points.iter() {
-        for (k, best) in octagon.iter_mut().enumerate() {
-            if key(p, k) > key(best, k) {
-                *best = *p;
+///
+/// The inside test runs per block of [`BLOCK`] points first: the corner of
+/// the block's bounding box lowest on each edge's inside function decides for
+/// the whole block (the box is convex and the test affine), and only the
+/// edges that corner fails are tested per point. The first pass leaves the
+/// blocks' boxes in `boxes` (`min`, `max` per block).
+fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut Vec<DVec2>) -> bool {
+    // The extremes of the four keys and the first block that reaches each.
+    let mut lo = [f64::INFINITY; 4];
+    let mut hi = [f64::NEG_INFINITY; 4];
+    let (mut lo_block, mut hi_block) = ([0; 4], [0; 4]);
+    let mut sum = 0.0;
+    boxes.clear();
+    boxes.reserve(2 * points.len().div_ceil(BLOCK));
+    for (b, block) in points.chunks(BLOCK).enumerate() {
+        let (block_lo, block_hi, block_sum) = block_extremes(block);
+        sum += block_sum;
+        boxes.push(DVec2::new(block_lo[0], block_lo[1]));
+        boxes.push(DVec2::new(block_hi[0], block_hi[1]));
+        for k in 0..4 {
+            if block_lo[k] < lo[k] {
+                lo[k] = block_lo[k];
+                lo_block[k] = b;
+            }
+            if block_hi[k] > hi[k] {
+                hi[k] = block_hi[k];
+                hi_block[k] = b;
             }
         }
     }
+    if !sum.is_finite() {
+        return false;
+    }
+    // The first point of that block with the extreme value (the same
+    // expressions as `block_extremes`, so the same bits).
+    let key = |p: &DVec2, k: usize| [p.x, p.y, p.x + p.y, p.x - p.y][k];
+    let corner = |block: usize, k: usize, value: f64| {
+        let block = &points[block * BLOCK..((block + 1) * BLOCK).min(points.len())];
+        block.iter().copied().find(|p| key(p, k) == value).unwrap_or(block[0])
+    };
+    // Counter-clockwise: bottom (min y), bottom-right (max x − y), right
+    // (max x), top-right (max x + y), top (max y), top-left (min x − y),
+    // left (min x), bottom-left (min x + y).
+    let octagon = [
+        corner(lo_block[1], 1, lo[1]),
+        corner(hi_block[3], 3, hi[3]),
+        corner(hi_block[0], 0, hi[0]),
+        corner(hi_block[2], 2, hi[2]),
+        corner(hi_block[1], 1, hi[1]),
+        corner(lo_block[3], 3, lo[3]),
+        corner(lo_block[0], 0, lo[0]),
+        corner(lo_block[2], 2, lo[2]),
+    ];
     // At most eight corners: kept in an array, so the pass allocates nothing.
     let mut corners = [DVec2::ZERO; 8];
     let mut n = 0;
@@ -97,7 +158,8 @@ fn discard_interior(points: &mut Vec<DVec2>) {
         }
     }
     if n < 3 {
-        return;
+        kept.extend_from_slice(points);
+        return true;
     }
     // Each edge `a → b` as the line `dx·y − dy·x − c` (positive inside),
     // with a margin above its rounding error: every term is at most
@@ -105,8 +167,9 @@ fn discard_interior(points: &mut Vec<DVec2>) {
     // of `b − a` each err by an `f64::EPSILON` of that, so `1e-12` of it is
     // thousands of times the error. Points are far from the origin compared
     // with their spread only when the spread is tiny; then fewer are
-    // dropped, never a vertex.
-    let scale = points.iter().fold(0.0_f64, |m, p| m.max(p.x.abs()).max(p.y.abs()));
+    // dropped, never a vertex. The blocks' box corners are made of the
+    // points' coordinates, so the same bound holds for them.
+    let scale = lo[0].abs().max(hi[0].abs()).max(lo[1].abs()).max(hi[1].abs());
     let mut lines = [(0.0, 0.0, 0.0, 0.0); 8];
     for (i, line) in lines[..n].iter_mut().enumerate() {
         let (a, b) = (corners[i], corners[(i + 1) % n]);
@@ -114,27 +177,41 @@ fn discard_interior(points: &mut Vec<DVec2>) {
         *line = (d.x, d.y, d.x * a.y - d.y * a.x, 1e-12 * (d.x.abs() + d.y.abs()) * scale);
     }
     let lines = &lines[..n];
-    let strictly_inside = |p: DVec2| lines.iter().all(|&(dx, dy, c, margin)| dx * p.y - dy * p.x - c > margin);
-    // `retain` by hand (same order): the closure call per point was a
-    // visible part of the pass.
-    let mut kept = 0;
-    for i in 0..points.len() {
-        let p = points[i];
-        if !strictly_inside(p) {
-            points[kept] = p;
-            kept += 1;
+    let inside = |&(dx, dy, c, margin): &(f64, f64, f64, f64), x: f64, y: f64| dx * y - dy * x - c > margin;
+    let mut open = [(0.0, 0.0, 0.0, 0.0); 8];
+    for (block, bounds) in points.chunks(BLOCK).zip(boxes.chunks_exact(2)) {
+        let (block_lo, block_hi) = (bounds[0], bounds[1]);
+        // The edges whose inside the block's box is not in: the box's corner
+        // lowest on the edge's inside function decides.
+        let mut m = 0;
+        for line in lines {
+            let x = if line.1 >= 0.0 { block_hi.x } else { block_lo.x };
+            let y = if line.0 >= 0.0 { block_lo.y } else { block_hi.y };
+            if !inside(line, x, y) {
+                open[m] = *line;
+                m += 1;
+            }
+        }
+        if m == 0 {
+            continue;
+        }
+        let open = &open[..m];
+        for &p in block {
+            if !open.iter().all(|line| inside(line, p.x, p.y)) {
+                kept.push(p);
+            }
         }
     }
-    points.truncate(kept);
+    true
 }
 
 /// Allocation-free form of [`convex_hull_2d`].
 ///
 /// Writes the hull of `points` to `hull`, replacing its contents. `scratch` is
 /// a working buffer whose contents on entry are ignored and on return are
-/// unspecified (currently the sorted, deduplicated finite points). Once both
-/// buffers have grown to fit the largest input, repeated calls do not
-/// allocate.
+/// unspecified (currently the sorted, deduplicated finite points that may be
+/// vertices). Once both buffers have grown to fit the largest input, repeated
+/// calls do not allocate.
 ///
 /// Output order, degenerate cases and the handling of non-finite points are
 /// those of [`convex_hull_2d`].
@@ -142,14 +219,14 @@ fn discard_interior(points: &mut Vec<DVec2>) {
 /// # Algorithm
 ///
 /// Andrew's monotone chain with exact orientation tests; `O(n log n)` time for
-/// `n` points. Inputs of more than 64 points are first thinned in `O(n)` by the
-/// Akl–Toussaint heuristic (on pixel-grid samples it leaves a few percent).
-/// See [`convex_hull_2d`].
+/// `n` points. Finite inputs of more than 64 points are first thinned in
+/// `O(n)` by the Akl–Toussaint heuristic, block by block (on pixel-grid
+/// samples it leaves a few percent). See [`convex_hull_2d`].
 pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
     scratch.clear();
-    scratch.extend(points.iter().copied().filter(|p| p.is_finite()));
-    if scratch.len() > AKL_TOUSSAINT_MIN_POINTS {
-        discard_interior(scratch);
+    // `hull` holds the thinning's block boxes until the chain overwrites it.
+    if points.len() <= AKL_TOUSSAINT_MIN_POINTS || !keep_possible_vertices(points, hull, scratch) {
+        scratch.extend(points.iter().copied().filter(|p| p.is_finite()));
     }
     scratch.sort_unstable_by(lexicographic);
     scratch.dedup();
@@ -227,6 +304,20 @@ mod tests {
                         let a = next() * std::f64::consts::TAU;
                         v(a.cos(), a.sin()) * (1.0 - f64::EPSILON * (k % 3) as f64)
                     }
+                    // A readback's pixels in row order through a perspective
+                    // map (the thinning's blocks are runs of a row), the
+                    // last row cut short.
+                    7 => {
+                        let (px, py) = ((k % 37) as f64, (k / 37) as f64);
+                        let w = 1.0 + 0.01 * px + 0.03 * py;
+                        v((px + 0.2 * py) / w, (py - 0.1 * px) / w)
+                    }
+                    // Non-finite points among finite ones: skipped.
+                    8 => match k % 11 {
+                        3 => v(f64::NAN, next()),
+                        7 => v(next(), f64::INFINITY),
+                        _ => v(next(), next() * 3.0),
+                    },
                     // Along a square's edges, a hair outside or inside
                     // (near-hull points right at the thinning octagon's edges).
                     _ => {
@@ -240,7 +331,7 @@ mod tests {
                     }
                 })
                 .collect();
-            let mut plain = points.clone();
+            let mut plain: Vec<DVec2> = points.iter().copied().filter(|p| p.is_finite()).collect();
             plain.sort_unstable_by(lexicographic);
             plain.dedup();
             let mut expected = Vec::new();

@@ -211,8 +211,23 @@ impl ConvexPolyhedron {
         // The new vertices on the plane: kept ones within eps of it, then
         // every cut point.
         on_plane.resize(vertices.len(), true);
+        let mut traced = false;
         if simple {
-            walker.boundary_from_along();
+            // The plane edges reversed without looking for each one's
+            // reverse among them (quadratic): when they trace one simple
+            // cycle of three or more, none has its reverse there (an edge
+            // and its reverse would close a cycle of two), so the checked
+            // boundary is the same. Otherwise the checked one is made.
+            walker.reverse_along();
+            traced = walker.boundary_len() >= 3
+                && walker.trace_simple(vertices.len(), |cycle| {
+                    let start = indices.len();
+                    indices.extend_from_slice(cycle);
+                    faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
+                });
+            if !traced {
+                walker.boundary_from_along();
+            }
         } else {
             walker.collect_cap_boundary(faces, indices, on_plane);
         }
@@ -228,7 +243,7 @@ impl ConvexPolyhedron {
             indices.extend_from_slice(cycle);
             faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
         };
-        if reference || !walker.trace_simple(vertices.len(), cap) {
+        if !traced && (reference || !walker.trace_simple(vertices.len(), cap)) {
             walker.walk(vertices.len(), |cycle| {
                 let start = indices.len();
                 indices.extend_from_slice(cycle);
@@ -408,6 +423,20 @@ impl LoopWalker {
             }
         }
         self.boundary_from_along();
+    }
+
+    /// The plane edges held flattened in `targets`, each reversed, in order,
+    /// as the boundary: [`Self::boundary_from_along`] without dropping the
+    /// edges whose reverse is there too.
+    pub(super) fn reverse_along(&mut self) {
+        let Self { boundary, targets: along, .. } = self;
+        boundary.clear();
+        boundary.extend(along.chunks_exact(2).map(|edge| (edge[1], edge[0])));
+    }
+
+    /// The number of boundary edges collected.
+    pub(super) fn boundary_len(&self) -> usize {
+        self.boundary.len()
     }
 
     /// The boundary edges among the plane edges held flattened in

@@ -128,15 +128,19 @@ impl ConvexPolyhedron {
     /// and face planes (`-0.0` differs from `0.0`; a NaN equals itself).
     /// Whatever is computed from a body alone is the same for both.
     pub(crate) fn bit_eq(&self, other: &Self) -> bool {
-        let bits = |v: &DVec3| v.to_array().map(f64::to_bits);
+        // Component by component: comparing `[u64; 3]` arrays called
+        // `memcmp` per vertex.
+        let same = |a: &DVec3, b: &DVec3| {
+            (a.x.to_bits() == b.x.to_bits()) & (a.y.to_bits() == b.y.to_bits()) & (a.z.to_bits() == b.z.to_bits())
+        };
         self.indices == other.indices
             && self.vertices.len() == other.vertices.len()
             && self.faces.len() == other.faces.len()
-            && self.vertices.iter().zip(&other.vertices).all(|(a, b)| bits(a) == bits(b))
+            && self.vertices.iter().zip(&other.vertices).all(|(a, b)| same(a, b))
             && self.faces.iter().zip(&other.faces).all(|(a, b)| {
                 a.start == b.start
                     && a.end == b.end
-                    && bits(&a.plane.normal) == bits(&b.plane.normal)
+                    && same(&a.plane.normal, &b.plane.normal)
                     && a.plane.offset.to_bits() == b.plane.offset.to_bits()
             })
     }

@@ -24,14 +24,12 @@ pub(super) fn solve_as(
     fallback: Option<Fallback>,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
-    let mut focus = ws.take_body();
-    problem.visible_receiver_body_into(&mut focus, ws);
-    let result = around(problem, &focus, method, fallback, ws);
-    ws.put_body(focus);
-    result
+    problem.with_visible_receiver_body(ws, |focus, ws| around(problem, focus, method, fallback, ws))
 }
 
-fn around(
+/// The focused map around `focus`, the visible receiver body: what
+/// [`solve_as`] gives, for callers already holding that body.
+pub(super) fn around(
     problem: &ShadowProblem,
     focus: &ConvexPolyhedron,
     method: Method,

@@ -66,11 +66,7 @@ pub(super) fn solve(
     options: &FocusedSnappedOptions,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
-    let mut focus = ws.take_body();
-    problem.visible_receiver_body_into(&mut focus, ws);
-    let result = solve_for(problem, options, &focus, ws);
-    ws.put_body(focus);
-    result
+    problem.with_visible_receiver_body(ws, |focus, ws| solve_for(problem, options, focus, ws))
 }
 
 fn solve_for(

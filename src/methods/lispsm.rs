@@ -71,11 +71,7 @@ impl Default for LiSpsmOptions {
 }
 
 pub(super) fn solve(problem: &ShadowProblem, options: &LiSpsmOptions, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
-    let mut focus = ws.take_body();
-    problem.visible_receiver_body_into(&mut focus, ws);
-    let result = solve_for(problem, options, &focus, ws);
-    ws.put_body(focus);
-    result
+    problem.with_visible_receiver_body(ws, |focus, ws| solve_for(problem, options, focus, ws))
 }
 
 fn solve_for(
@@ -85,10 +81,10 @@ fn solve_for(
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::LiSpsm, None, ws);
+        return super::focused::around(problem, focus, Method::LiSpsm, None, ws);
     }
     if problem.camera().is_orthographic() {
-        return super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::OrthographicCamera), ws);
+        return super::focused::around(problem, focus, Method::LiSpsm, Some(Fallback::OrthographicCamera), ws);
     }
     let frame = problem.frame_towards(focus);
     let j0 = super::uniform_axis(problem, &frame, focus, Method::LiSpsm, ws)?;
@@ -102,7 +98,7 @@ fn solve_for(
     };
     let sin_gamma = view.cross(ray).length();
     let uniform = |sin_gamma, ws: &mut SolveWorkspace| {
-        super::focused::solve_as(problem, Method::LiSpsm, Some(Fallback::LightAlongView { sin_gamma }), ws)
+        super::focused::around(problem, focus, Method::LiSpsm, Some(Fallback::LightAlongView { sin_gamma }), ws)
     };
     if !(sin_gamma >= problem.tolerances().lispsm_min_sin_gamma) {
         return uniform(sin_gamma, ws);

@@ -74,11 +74,7 @@ pub(super) fn solve(
     if !(options.min_relative_w > 0.0 && options.min_relative_w < 1.0) {
         return Err(LixelError::InvalidPlane { reason: "min_relative_w must lie in (0, 1)" });
     }
-    let mut focus = ws.take_body();
-    problem.visible_receiver_body_into(&mut focus, ws);
-    let result = solve_on(problem, options, &plane, &focus, ws);
-    ws.put_body(focus);
-    result
+    problem.with_visible_receiver_body(ws, |focus, ws| solve_on(problem, options, &plane, focus, ws))
 }
 
 fn solve_on(
@@ -89,12 +85,12 @@ fn solve_on(
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::PlaneOptimal, None, ws);
+        return super::focused::around(problem, focus, Method::PlaneOptimal, None, ws);
     }
     let frame = problem.frame_towards(focus);
     let focused_axis = super::uniform_axis(problem, &frame, focus, Method::PlaneOptimal, ws)?.normalize();
     let Some(plane_axis) = plane_optimal_axis(problem, &frame, plane) else {
-        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate), ws);
+        return super::focused::around(problem, focus, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate), ws);
     };
 
     // The visible part of the plane (a thin slab of the focus body).
@@ -108,7 +104,7 @@ fn solve_on(
     );
     if on_plane.is_empty() {
         ws.put_body(on_plane);
-        return super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneNotVisible), ws);
+        return super::focused::around(problem, focus, Method::PlaneOptimal, Some(Fallback::PlaneNotVisible), ws);
     }
     let beta = options.min_relative_w;
     let directions = |body: &ConvexPolyhedron, ws: &mut SolveWorkspace| -> Vec<DVec3> {
@@ -153,7 +149,7 @@ fn solve_on(
     // light grazing the plane): the plane is degenerate for this light.
     problem
         .place(frame, axis, focus, Method::PlaneOptimal, fallback, ws)
-        .or_else(|_| super::focused::solve_as(problem, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate), ws))
+        .or_else(|_| super::focused::around(problem, focus, Method::PlaneOptimal, Some(Fallback::PlaneDegenerate), ws))
 }
 
 /// The unit plane-optimal axis in light coordinates of `frame`, or `None`

@@ -117,11 +117,7 @@ fn classify(problem: &ShadowProblem, light: DVec4) -> PsmLightCase {
 }
 
 pub(super) fn solve(problem: &ShadowProblem, options: &PsmOptions, ws: &mut SolveWorkspace) -> Result<LightMatrix> {
-    let mut focus = ws.take_body();
-    problem.visible_receiver_body_into(&mut focus, ws);
-    let result = solve_for(problem, options, &focus, ws);
-    ws.put_body(focus);
-    result
+    problem.with_visible_receiver_body(ws, |focus, ws| solve_for(problem, options, focus, ws))
 }
 
 fn solve_for(
@@ -131,10 +127,10 @@ fn solve_for(
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     if focus.is_empty() {
-        return super::focused::solve_as(problem, Method::Psm, None, ws);
+        return super::focused::around(problem, focus, Method::Psm, None, ws);
     }
     if problem.camera().is_orthographic() {
-        return super::focused::solve_as(problem, Method::Psm, Some(Fallback::OrthographicCamera), ws);
+        return super::focused::around(problem, focus, Method::Psm, Some(Fallback::OrthographicCamera), ws);
     }
     let mut hull = ws.take_body();
     problem.psm_hull_into(&mut hull, ws);
@@ -142,53 +138,78 @@ fn solve_for(
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
     // alone, and failing that use the focused map.
-    let first = psm_axis(problem, options, &hull, &frame, ws)
-        .and_then(|axis| place(problem, frame, axis, &hull, focus, None, ws).ok());
+    let first = attempt(problem, options, frame, &hull, focus, None, ws);
     ws.put_body(hull);
     if let Some(matrix) = first {
         return Ok(matrix);
     }
     let fallback = Some(Fallback::PsmHullAroundLight);
-    if let Some(matrix) = psm_axis(problem, options, focus, &frame, ws)
-        .and_then(|axis| place(problem, frame, axis, focus, focus, fallback, ws).ok())
-    {
+    if let Some(matrix) = attempt(problem, options, frame, focus, focus, fallback, ws) {
         return Ok(matrix);
     }
-    super::focused::solve_as(problem, Method::Psm, fallback, ws)
+    super::focused::around(problem, focus, Method::Psm, fallback, ws)
 }
 
-/// Map around `region` (with the visible receivers), depth over their casters.
+/// PSM's map around `region` (with the visible receivers `focus`): its
+/// axis, then the placement; `None` where either fails. `region`'s mappable
+/// vertices are taken once for both.
+fn attempt(
+    problem: &ShadowProblem,
+    options: &PsmOptions,
+    frame: LightFrame,
+    region: &ConvexPolyhedron,
+    focus: &ConvexPolyhedron,
+    fallback: Option<Fallback>,
+    ws: &mut SolveWorkspace,
+) -> Option<LightMatrix> {
+    let mut mapped = ws.take_points();
+    problem.mappable_vertices_into(region, &mut mapped, ws);
+    let result = psm_axis(problem, options, region, &mapped, &frame, ws)
+        .and_then(|axis| place(problem, frame, axis, region, &mapped, focus, fallback, ws).ok());
+    ws.put_points(mapped);
+    result
+}
+
+/// Map around `region` (with the visible receivers), depth over their
+/// casters; `mapped` are `region`'s mappable vertices.
+#[allow(clippy::too_many_arguments)]
 fn place(
     problem: &ShadowProblem,
     frame: LightFrame,
     axis: DVec3,
     region: &ConvexPolyhedron,
+    mapped: &[DVec3],
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     let mut points = ws.take_points();
-    problem.mappable_vertices_into(region, &mut points, ws);
+    points.extend_from_slice(mapped);
     let mut more = ws.take_points();
     problem.mappable_vertices_into(focus, &mut more, ws);
     points.extend_from_slice(&more);
     // Depth covers the casters of the visible receivers and all of `region`
     // (for `H`, which holds casters itself, the light included when it lies
-    // in `S`: such a map needs unclipped depth).
-    ws.put_points(more);
+    // in `S`: such a map needs unclipped depth). The depth points add to
+    // the mapped ones, which hold `region`'s mappable vertices already: only
+    // the rest of its vertices (next to the light) are passed again.
+    problem.unmappable_vertices_into(region, &mut more);
     let result = problem.with_casters(focus, ws, |casters, ws| {
-        problem.placement(frame, axis, &points, region.vertices(), Some(casters), Method::Psm, fallback).build_in(ws)
+        problem.placement(frame, axis, &points, &more, Some(casters), Method::Psm, fallback).build_in(ws)
     });
+    ws.put_points(more);
     ws.put_points(points);
     result
 }
 
-/// PSM's optical axis for `region`, in light coordinates of `frame`; `None`
-/// when the directions from the light to `region` do not fit in a cone.
+/// PSM's optical axis for `region` (`mapped`: its mappable vertices), in
+/// light coordinates of `frame`; `None` when the directions from the light
+/// to `region` do not fit in a cone.
 fn psm_axis(
     problem: &ShadowProblem,
     options: &PsmOptions,
     region: &ConvexPolyhedron,
+    mapped: &[DVec3],
     frame: &LightFrame,
     ws: &mut SolveWorkspace,
 ) -> Option<DVec3> {
@@ -198,7 +219,7 @@ fn psm_axis(
     let pps = post_perspective(problem, options, region);
     let l = pps.light;
     let mut dirs = ws.take_points();
-    problem.mappable_vertices_into(region, &mut dirs, ws);
+    dirs.extend_from_slice(mapped);
     for p in &mut dirs {
         let q = pps.clip_from_world * p.extend(1.0);
         *p = q.truncate() * l.w - l.truncate() * q.w;

@@ -12,6 +12,7 @@
 //! per-light state and the paper's cadence.
 
 mod extract;
+mod holds;
 mod objective;
 mod samples;
 mod schedule;
@@ -23,7 +24,7 @@ use glam::{DMat3, DVec2, DVec3};
 use crate::error::{LixelError, Result};
 use crate::fit::{AffineFitOptions, FitWorkspace};
 use crate::geometry::min_enclosing_cone_in;
-use crate::matrix::{fit_homography, holds_all, AxisFit, Fallback, LightMatrix, Method};
+use crate::matrix::{fit_homography, AxisFit, Fallback, LightMatrix, Method};
 
 pub use extract::SampleWorkspace;
 pub use objective::{objective, objective_gradient, plane_frame_gradient, sample_badness, BoundarySample};
@@ -454,13 +455,13 @@ impl Optimizer {
                 report.snapped = true;
             }
         }
-        let other = other_h.map(|h| self.finish(samples, h));
         // The answer must hold every relevant sample (not only the extreme
-        // rays it was fitted to): otherwise the other matrix, else the
-        // focused one.
+        // rays it was fitted to): otherwise the other matrix (made only
+        // then), else the focused one.
         if self.holds_samples(samples, &matrix) {
             return Ok(matrix);
         }
+        let other = other_h.map(|h| self.finish(samples, h));
         if let Some(other) = other.filter(|m| self.holds_samples(samples, m)) {
             report.accepted = !report.accepted;
             report.snapped = false;
@@ -482,8 +483,8 @@ impl Optimizer {
     fn holds_samples(&self, samples: &Samples, matrix: &LightMatrix) -> bool {
         let slack = samples.problem.tolerances().coverage_slack;
         matrix.clip_from_world.is_finite()
-            && holds_all(&matrix.homography, &samples.relevant, slack)
-            && samples.relevant_world.iter().all(|&p| matrix.covers(p, slack))
+            && holds::holds_all_points(&matrix.homography, &samples.relevant, slack)
+            && holds::covers_all(matrix, &samples.relevant_world, slack)
     }
 
     /// The objective of optical axis `axis` (light coordinates of
