@@ -5,9 +5,9 @@
 // For a receiver p (texel position, depth zeta = z / w of the light matrix):
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
 //    touches the texel); p inside the stored triangle -> its plane decides;
-//    with SPSM_INNER_EDGES, p outside a small one only across inner edges
-//    (the caster continues there, session 7) and far enough behind its
-//    plane -> shadowed;
+//    with SPSM_INNER_EDGES, p outside a small one but inside the (grown)
+//    neighbour triangle across one of its inner edges (the caster continues
+//    there; sessions 7 and 9) and far enough behind its plane -> shadowed;
 // 2. the 3x3 neighbourhood: any stored triangle containing p whose plane is
 //    in front of p -> shadowed; else p on the own triangle's plane (within
 //    its change over a texel) -> lit (a curved receiver's neighbouring

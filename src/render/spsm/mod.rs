@@ -130,8 +130,9 @@ impl SpsmOptions {
     /// The default: the paper's bias (1e-5) with the packing tolerance,
     /// the log-polar derivative code ([`GradientCode::LogPolar`]; the
     /// paper's power code lost whole shadows under scene-optimized
-    /// matrices, see [`GradientCode`]) and the hybrid
-    /// [`StandardFallback::Uncertain`].
+    /// matrices, see [`GradientCode`]), the hybrid
+    /// [`StandardFallback::Uncertain`] and the
+    /// [`inner_edges`](Self::inner_edges) continuation.
     pub const PAPER: Self = Self {
         gradient_code: GradientCode::LogPolar,
         bias: 1e-5,

@@ -447,4 +447,34 @@ mod tests {
         assert!(!texel_touches(tri, [5, 1], 0.0));
         assert!(!texel_touches(tri, [5, 1], -0.01));
     }
+
+    /// The compact texel's layout as `spsm_field_put` / `spsm_pack_compact`
+    /// write it: codes from logical bit 0, offsets from 24, the marker's
+    /// bits 26..30 of word x skipped.
+    #[test]
+    fn compact_texel_round_trips() {
+        let put = |words: &mut [u32; 3], l: u32, n: u32, value: u32| {
+            for i in 0..n {
+                let logical = l + i;
+                let physical = if logical >= 26 { logical + 5 } else { logical };
+                words[(physical / 32) as usize] |= ((value >> i) & 1) << (physical % 32);
+            }
+        };
+        let offsets = [DVec2::new(-3.99, 0.5), DVec2::new(1.25, -2.0), DVec2::new(3.98, 3.5)];
+        let mut words = [COMPACT_MARK, 0, 0];
+        put(&mut words, 0, 24, 0x00a5_1f3c);
+        for (k, o) in offsets.iter().enumerate() {
+            let fixed = |v: f64| ((v + 4.0) * 256.0).round().clamp(0.0, 2047.0) as u32;
+            put(&mut words, 24 + 22 * k as u32, 11, fixed(o.x));
+            put(&mut words, 35 + 22 * k as u32, 11, fixed(o.y));
+        }
+        assert_eq!(words[0] & COMPACT_MARK, COMPACT_MARK);
+        assert_eq!(compact_codes(words), 0x00a5_1f3c);
+        for (a, b) in offsets.iter().zip(compact_offsets(words)) {
+            assert!((*a - b).abs().max_element() <= 0.5 / 256.0 + 1e-12, "{a} vs {b}");
+        }
+        let decoded =
+            unpack([words[0], words[1], words[2], 0x8000_0101], [3, 4], [8, 8], GradientCode::LogPolar).unwrap();
+        assert!((decoded.vertices[1] - DVec2::new(4.75, 2.5)).length() < 1e-9);
+    }
 }
