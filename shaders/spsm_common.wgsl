@@ -16,13 +16,18 @@
 // Texel (Rgba32Uint):
 //   x, y, z: the closest triangle's vertices v0, v1, v2 relative to the texel
 //            centre, in texels, as two f16 each (pack2x16float). With
-//            SPSM_INNER_EDGES (SpsmOptions::inner_edges), when every
-//            offset component lies within SPSM_FLAG_REACH, bit 0 of
-//            word k (the last bit of v_k's x) is 1 when edge v_k -> v_(k+1)
-//            is inner (session 7: the mesh continues across it on the
-//            light's side; spsm_pass.wgsl, spsm_inner_edges), that x
-//            rounded to the nearer f16 of that parity (error at most one
-//            f16 step, 2^-8 texel there); farther triangles keep plain f16s;
+//            SPSM_INNER_EDGES (SpsmOptions::inner_edges): a small
+//            triangle (twice its area below SPSM_FACET_AREA texels², every
+//            offset component within SPSM_FLAG_REACH) with an inner edge
+//            (the mesh continues across it on the light's side; session 7,
+//            spsm_pass.wgsl, spsm_inner_edges) is stored compact instead
+//            (session 9): bits 30..26 of x are all set (v0.y's f16
+//            exponent all ones: inf or NaN, which plain offsets never are)
+//            and the other 91 bits of x, y, z (x's low 26 bits, then bit
+//            31, then y and z; spsm_field_get) hold edge k's 8-bit code
+//            (bits 8k..8k+7; 0: not inner, else the neighbour triangle's
+//            opposite vertex, spsm_edge_code) and, from bit 24, the six
+//            offsets in 11-bit fixed point over [-4, 4) (1/256 texel);
 //   w:       bits 31..16: zeta at the texel centre on the triangle's plane,
 //            16-bit unorm over [-1/16, 17/16];
 //            bits 15..0: the plane's gradient (dzeta/dx, dzeta/dy), never 0:
@@ -120,27 +125,114 @@ fn spsm_decode_gradient(bits: u32, map_size: vec2<f32>) -> vec4<f32> {
     return vec4<f32>(m * cos(angle), m * sin(angle), e, e);
 }
 
-// Offsets below this (every component, in texels) carry the inner-edge
-// flags in their f16 bits: the extra rounding stays below 2^-8 texel.
+// Small facets whose offsets all lie within this (every component, in
+// texels) may be stored compact (SPSM_INNER_EDGES).
 const SPSM_FLAG_REACH: f32 = 4.0;
+// A small stored triangle (twice its area below this, in texels²) is taken
+// for a facet of a finely tessellated curved surface (session 4).
+const SPSM_FACET_AREA: f32 = 2.0;
+// The compact texel's marker: bits 30..26 of word x.
+const SPSM_COMPACT_MARK: u32 = 0x7c000000u;
 
 fn spsm_pack_offset(v: vec2<f32>) -> u32 {
     return pack2x16float(clamp(v, vec2<f32>(-SPSM_MAX_OFFSET), vec2<f32>(SPSM_MAX_OFFSET)));
 }
 
-// Vertex offset `v` with `flag` in bit 0: when the rounded x has the other
-// parity, the neighbouring f16 on the side of the exact value (one f16 step
-// at most from it).
-fn spsm_pack_vertex(v: vec2<f32>, flag: u32) -> u32 {
-    let clamped = clamp(v, vec2<f32>(-SPSM_MAX_OFFSET), vec2<f32>(SPSM_MAX_OFFSET));
-    let bits = pack2x16float(clamped);
-    if (bits & 1u) == flag {
-        return bits;
+// Bits [p, p + n) of the 96-bit words w (x, y, z; bit p of the whole is
+// bit p % 32 of word p / 32), n <= 16.
+fn spsm_phys_get(w: vec3<u32>, p: u32, n: u32) -> u32 {
+    let i = p / 32u;
+    let b = p % 32u;
+    let first = min(n, 32u - b);
+    var v = extractBits(w[i], b, first);
+    if first < n {
+        v |= extractBits(w[i + 1u], 0u, n - first) << first;
     }
-    let rounded = unpack2x16float(bits).x;
-    // f16 magnitudes grow with their bits; the bits of +-0 only upwards.
-    let up = abs(clamped.x) >= abs(rounded) || (bits & 0x7fffu) == 0u;
-    return select(bits - 1u, bits + 1u, up);
+    return v;
+}
+
+fn spsm_phys_put(w: vec3<u32>, p: u32, n: u32, value: u32) -> vec3<u32> {
+    var out = w;
+    let i = p / 32u;
+    let b = p % 32u;
+    let first = min(n, 32u - b);
+    out[i] = insertBits(out[i], value, b, first);
+    if first < n {
+        out[i + 1u] = insertBits(out[i + 1u], value >> first, 0u, n - first);
+    }
+    return out;
+}
+
+// Logical bit l of a compact texel's 91 payload bits: the words' bits
+// without the marker's 26..30.
+fn spsm_field_get(w: vec3<u32>, l: u32, n: u32) -> u32 {
+    if l < 26u && l + n > 26u {
+        let lo = 26u - l;
+        return spsm_phys_get(w, l, lo) | (spsm_phys_get(w, 31u, n - lo) << lo);
+    }
+    return spsm_phys_get(w, select(l, l + 5u, l >= 26u), n);
+}
+
+fn spsm_field_put(w: vec3<u32>, l: u32, n: u32, value: u32) -> vec3<u32> {
+    if l < 26u && l + n > 26u {
+        let lo = 26u - l;
+        return spsm_phys_put(spsm_phys_put(w, l, lo, value), 31u, n - lo, value >> lo);
+    }
+    return spsm_phys_put(w, select(l, l + 5u, l >= 26u), n, value);
+}
+
+fn spsm_fixed_offset(v: f32) -> u32 {
+    return u32(clamp(round((v + 4.0) * 256.0), 0.0, 2047.0));
+}
+
+// The compact texel words x, y, z of offsets v0, v1, v2 and edge codes
+// `codes` (8 bits per edge).
+fn spsm_pack_compact(v0: vec2<f32>, v1: vec2<f32>, v2: vec2<f32>, codes: u32) -> vec3<u32> {
+    var w = vec3<u32>(SPSM_COMPACT_MARK, 0u, 0u);
+    w = spsm_field_put(w, 0u, 24u - 8u, codes & 0xffffu);
+    w = spsm_field_put(w, 16u, 8u, codes >> 16u);
+    w = spsm_field_put(w, 24u, 11u, spsm_fixed_offset(v0.x));
+    w = spsm_field_put(w, 35u, 11u, spsm_fixed_offset(v0.y));
+    w = spsm_field_put(w, 46u, 11u, spsm_fixed_offset(v1.x));
+    w = spsm_field_put(w, 57u, 11u, spsm_fixed_offset(v1.y));
+    w = spsm_field_put(w, 68u, 11u, spsm_fixed_offset(v2.x));
+    w = spsm_field_put(w, 79u, 11u, spsm_fixed_offset(v2.y));
+    return w;
+}
+
+fn spsm_compact_offset(w: vec3<u32>, l: u32) -> vec2<f32> {
+    return vec2<f32>(f32(spsm_field_get(w, l, 11u)), f32(spsm_field_get(w, l + 11u, 11u))) / 256.0 - 4.0;
+}
+
+// Edge a -> b's code of the neighbour triangle's opposite vertex o (on
+// the far side of the edge's line): bits 3..0 its height h over the line
+// in texels, floor(2 log2 h) + 9 (1..=15: h from 1/16 to 8, rounded down
+// so that the decoded neighbour lies inside the true one's strip; 0: not
+// inner, or h below 1/16), bits 7..4 its position along the edge
+// s = (o - a).(b - a) / |b - a|², round(5 (s + 1)) (0..=15: s from -1 to
+// 2 in steps of 0.2).
+fn spsm_edge_code(a: vec2<f32>, b: vec2<f32>, o: vec2<f32>) -> u32 {
+    let e = b - a;
+    let l2 = dot(e, e);
+    if !(l2 > 0.0) {
+        return 0u;
+    }
+    let h = abs(spsm_cross(e, o - a)) / sqrt(l2);
+    if !(h >= 0.0625) {
+        return 0u;
+    }
+    let hq = u32(clamp(floor(2.0 * log2(h) + 9.0), 1.0, 15.0));
+    let s = dot(o - a, e) / l2;
+    let sq = u32(clamp(round(5.0 * (s + 1.0)), 0.0, 15.0));
+    return hq | (sq << 4u);
+}
+
+// The opposite vertex of code `code` (nonzero) of edge a -> b, on the side
+// of outward normal `n` (unit).
+fn spsm_edge_apex(a: vec2<f32>, b: vec2<f32>, n: vec2<f32>, code: u32) -> vec2<f32> {
+    let h = exp2((f32(code & 15u) - 9.0) * 0.5);
+    let s = f32(code >> 4u) * 0.2 - 1.0;
+    return a + s * (b - a) + h * n;
 }
 
 // Signed doubled area (texel space).
@@ -260,7 +352,8 @@ fn spsm_clipped_edge_min(a: vec2<f32>, b: vec2<f32>, lo: vec2<f32>, hi: vec2<f32
 struct SpsmTexel {
     // 0: a triangle; 1: depth only; 2: empty.
     kind: u32,
-    // Bit k: edge v_k -> v_(k+1) is inner (the mesh continues across it).
+    // Bits 8k..8k+7: edge v_k -> v_(k+1)'s code (spsm_edge_code; 0: not
+    // inner, the mesh does not continue across it on the light's side).
     inner: u32,
     // Vertices in absolute texel coordinates.
     v0: vec2<f32>,
@@ -293,13 +386,17 @@ fn spsm_decode_shape(words: vec4<u32>, texel: vec2<i32>) -> SpsmTexel {
         return out;
     }
     out.kind = 0u;
+    if SPSM_INNER_EDGES && (words.x & SPSM_COMPACT_MARK) == SPSM_COMPACT_MARK {
+        let w = words.xyz;
+        out.inner = spsm_field_get(w, 0u, 16u) | (spsm_field_get(w, 16u, 8u) << 16u);
+        out.v0 = out.centre + spsm_compact_offset(w, 24u);
+        out.v1 = out.centre + spsm_compact_offset(w, 46u);
+        out.v2 = out.centre + spsm_compact_offset(w, 68u);
+        return out;
+    }
     out.v0 = out.centre + unpack2x16float(words.x);
     out.v1 = out.centre + unpack2x16float(words.y);
     out.v2 = out.centre + unpack2x16float(words.z);
-    let reach = max(max(abs(out.v0 - out.centre), abs(out.v1 - out.centre)), abs(out.v2 - out.centre));
-    if SPSM_INNER_EDGES && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
-        out.inner = (words.x & 1u) | ((words.y & 1u) << 1u) | ((words.z & 1u) << 2u);
-    }
     return out;
 }
 

@@ -5,9 +5,9 @@
 // For a receiver p (texel position, depth zeta = z / w of the light matrix):
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
 //    touches the texel); p inside the stored triangle -> its plane decides;
-//    with SPSM_INNER_EDGES, p outside a small one only across inner edges
-//    (the caster continues there, session 7) and far enough behind its
-//    plane -> shadowed;
+//    with SPSM_INNER_EDGES, p outside a small one but inside the (grown)
+//    neighbour triangle across one of its inner edges (the caster continues
+//    there; sessions 7 and 9) and far enough behind its plane -> shadowed;
 // 2. the 3x3 neighbourhood: any stored triangle containing p whose plane is
 //    in front of p -> shadowed; else p on the own triangle's plane (within
 //    its change over a texel) -> lit (a curved receiver's neighbouring
@@ -325,9 +325,6 @@ const SPSM_PATH_DEPTH_ONLY: u32 = 256u;
 // plane is in front of p (spsm_continues_to).
 const SPSM_PATH_CONTINUED: u32 = 512u;
 
-// A small stored triangle (twice its area below this, in texels²) is taken
-// for a facet of a finely tessellated curved surface (session 4).
-const SPSM_FACET_AREA: f32 = 2.0;
 // Largest facet width assumed for an unstored outer facet, in texels.
 const SPSM_FACET_WIDTH: f32 = 1.0;
 
@@ -362,27 +359,39 @@ fn spsm_beyond_facet(t: SpsmTexel, p: vec2<f32>) -> bool {
 }
 
 // Whether the caster of triangle t continues to p (session 7): p lies
-// outside t, and only beyond edges that are inner for the light (the pass's
-// flags, spsm_inner_edges), so p's part of the texel holds the mesh's next
-// facet, unstored (a tessellated curved caster's thin outer facets lose
-// every texel to the facet nearer the light); t's plane stands in for it.
+// outside t, a small stored facet, inside the neighbour triangle across one
+// of t's inner edges (the pass's codes, spsm_inner_edges; session 9: before,
+// only beyond inner edges, and the wedge beyond a sliver's inner edge
+// reached far past its neighbour), so p's part of the texel holds the
+// mesh's next facet, unstored (a tessellated curved caster's thin outer
+// facets lose every texel to the facet nearer the light); t's plane stands
+// in for it.
 fn spsm_continues_to(t: SpsmTexel, p: vec2<f32>) -> bool {
     let area2 = spsm_cross(t.v1 - t.v0, t.v2 - t.v0);
     let orient = sign(area2);
-    if !SPSM_INNER_EDGES || orient == 0.0 || abs(area2) >= SPSM_FACET_AREA {
+    if !SPSM_INNER_EDGES || t.inner == 0u || orient == 0.0 || abs(area2) >= SPSM_FACET_AREA {
         return false;
     }
-    var beyond = 0u;
-    if dot(p - t.v0, spsm_edge_normal(t.v0, t.v1, orient)) > 0.0 {
-        beyond |= 1u;
+    let v = array<vec2<f32>, 3>(t.v0, t.v1, t.v2);
+    for (var k = 0u; k < 3u; k++) {
+        let code = (t.inner >> (8u * k)) & 0xffu;
+        if code == 0u {
+            continue;
+        }
+        let a = v[k];
+        let b = v[(k + 1u) % 3u];
+        let n = spsm_edge_normal(a, b, orient);
+        if dot(p - a, n) <= 0.0 {
+            continue;
+        }
+        // p beyond edge k: inside the neighbour (a, b, apex), its apex
+        // moved out (spsm_inner_edges)?
+        let o = spsm_edge_apex(a, b, n, code);
+        if spsm_cross(o - b, p - b) * orient <= 0.0 && spsm_cross(a - o, p - o) * orient <= 0.0 {
+            return true;
+        }
     }
-    if dot(p - t.v1, spsm_edge_normal(t.v1, t.v2, orient)) > 0.0 {
-        beyond |= 2u;
-    }
-    if dot(p - t.v2, spsm_edge_normal(t.v2, t.v0, orient)) > 0.0 {
-        beyond |= 4u;
-    }
-    return beyond != 0u && (beyond & ~t.inner) == 0u;
+    return false;
 }
 
 // How far behind a caster, in multiples of the caster facet's own longest

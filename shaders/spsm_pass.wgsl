@@ -71,7 +71,7 @@ struct SpsmVertex {
     // The world position, interpolated (clipped fallback only: its
     // centre-sampled depth, session 6).
     @location(9) world: vec3<f32>,
-    // Bit k: edge t_k -> t_(k+1) is inner (spsm_inner_edges).
+    // Edge k's code in bits 8k..8k+7 (spsm_inner_edges).
     @location(10) @interpolate(flat) inner: u32,
 }
 
@@ -100,17 +100,46 @@ fn spsm_meet(n1: vec2<f32>, c1: f32, n2: vec2<f32>, c2: f32) -> vec2<f32> {
     return vec2<f32>(c1 * n2.y - c2 * n1.y, n1.x * c2 - n2.x * c1) / det;
 }
 
-// The triangle's inner edges for the light (session 7): bit k set when the
-// mesh continues across edge t_k -> t_(k+1) on the same side of the light,
-// i.e. the neighbour's opposite vertex projects to the other side of the
-// edge's line than this triangle's third vertex. Edges with no neighbour,
-// or whose neighbour folds back (a silhouette edge from the light) or
-// cannot be projected, are not inner.
+// How far the continuation across an inner edge reaches (session 9): the
+// neighbour's opposite vertex is stored moved away from the edge to this
+// multiple of its height, SPSM_CONTINUE_CURVED when the triangle meets a
+// neighbour at an angle (sine above SPSM_CURVED_SINE: a tessellated
+// curved caster, whose facets beyond the neighbour continue towards the
+// silhouette), else SPSM_CONTINUE_FLAT (a flat mesh continues in its
+// plane). Default preset, first 10 lights (focused+spsm / optimized+spsm;
+// the unscaled neighbour 1398.6 / 808.8): curved 3, flat 1: 1321.0 / 783.0;
+// curved 3, flat 2: 1361.4 / 693.5 (configuration 5's caster is flat
+// meshed); every edge x 2: 1400.7 / 695.0. Issue-16 note, session 9.
+const SPSM_CONTINUE_CURVED: f32 = 3.0;
+const SPSM_CONTINUE_FLAT: f32 = 2.0;
+const SPSM_CURVED_SINE: f32 = 0.02;
+
+// The unit normal (either orientation) of the triangle at index slots
+// first..first + 2, in world space; zero when degenerate.
+fn spsm_world_normal(first: u32) -> vec3<f32> {
+    let a = spsm_world_of(first);
+    let n = cross(spsm_world_of(first + 1u) - a, spsm_world_of(first + 2u) - a);
+    let l = length(n);
+    return select(vec3<f32>(0.0), n / l, l > 0.0);
+}
+
+// The triangle's inner edges for the light (session 7): edge k (t_k ->
+// t_(k+1)) is inner when the mesh continues across it on the same side of
+// the light, i.e. the neighbour's opposite vertex projects to the other
+// side of the edge's line than this triangle's third vertex. Edges with no
+// neighbour, or whose neighbour folds back (a silhouette edge from the
+// light) or cannot be projected, are not inner. Bits 8k..8k+7: edge k's
+// code (spsm_edge_code, session 9: where the neighbour's opposite vertex
+// lies, moved out by SPSM_CONTINUE_CURVED or SPSM_CONTINUE_FLAT), 0 when
+// not inner.
 fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
-    var inner = 0u;
     if !SPSM_INNER_EDGES {
-        return inner;
+        return 0u;
     }
+    var inner = 0u;
+    var apex: array<vec2<f32>, 3>;
+    var curved = false;
+    let own_normal = spsm_world_normal(first);
     for (var k = 0u; k < 3u; k++) {
         let across = scene_adjacent[first + k];
         if across >= arrayLength(&scene_indices) {
@@ -122,13 +151,27 @@ fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
         }
         let a = t[k];
         let e = t[(k + 1u) % 3u] - a;
-        let own = spsm_cross(e, t[(k + 2u) % 3u] - a);
-        let other = spsm_cross(e, spsm_to_texel(c) - a);
-        if own * other < 0.0 {
+        let o = spsm_to_texel(c);
+        let other_normal = spsm_world_normal(across - across % 3u);
+        curved = curved || length(cross(own_normal, other_normal)) > SPSM_CURVED_SINE;
+        if spsm_cross(e, t[(k + 2u) % 3u] - a) * spsm_cross(e, o - a) < 0.0 {
             inner |= 1u << k;
+            apex[k] = o;
         }
     }
-    return inner;
+    let scale = select(SPSM_CONTINUE_FLAT, SPSM_CONTINUE_CURVED, curved);
+    var codes = 0u;
+    for (var k = 0u; k < 3u; k++) {
+        if (inner & (1u << k)) == 0u {
+            continue;
+        }
+        let a = t[k];
+        let b = t[(k + 1u) % 3u];
+        let n = normalize(vec2<f32>(a.y - b.y, b.x - a.x));
+        let o = apex[k] + (scale - 1.0) * dot(apex[k] - a, n) * n;
+        codes |= spsm_edge_code(a, b, o) << (8u * k);
+    }
+    return codes;
 }
 
 @vertex
@@ -328,10 +371,12 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
         spsm_pack_offset(in.t2 - c),
         (spsm_encode_depth(zeta_c) << 16u) | spsm_encode_gradient(g, shadow_pass.clamp.yz),
     );
-    if SPSM_INNER_EDGES && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
-        out.texel.x = spsm_pack_vertex(in.t0 - c, in.inner & 1u);
-        out.texel.y = spsm_pack_vertex(in.t1 - c, (in.inner >> 1u) & 1u);
-        out.texel.z = spsm_pack_vertex(in.t2 - c, (in.inner >> 2u) & 1u);
+    let area2 = abs(spsm_cross(in.t1 - in.t0, in.t2 - in.t0));
+    if SPSM_INNER_EDGES && in.inner != 0u && area2 < SPSM_FACET_AREA && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
+        let w = spsm_pack_compact(in.t0 - c, in.t1 - c, in.t2 - c, in.inner);
+        out.texel.x = w.x;
+        out.texel.y = w.y;
+        out.texel.z = w.z;
     }
     out.depth = spsm_depth_key(min_depth);
     return out;

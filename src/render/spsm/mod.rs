@@ -65,20 +65,19 @@ pub struct SpsmOptions {
     /// Where the lookup takes the standard lookup's verdict instead of its
     /// own (issue 16, session 5; see [`StandardFallback`]).
     pub standard_fallback: StandardFallback,
-    /// Inner-edge continuation (issue 16, session 7): the pass marks each
-    /// stored triangle's inner edges (the mesh continues across them on the
-    /// light's side; from the scene's edge adjacency) in its vertex words,
-    /// and a receiver outside a small stored facet only across inner edges,
-    /// far enough behind its plane (farther than its own distance to the
-    /// facet, in world units), is shadowed: a tessellated curved caster's
-    /// thin outer facets, which lose every texel to the facet nearer the
-    /// light, then still cast their shadow edges. Off in [`Self::PAPER`]:
-    /// it fixes the missing-facet class where it dominates (default preset,
-    /// configuration 5: `optimized+spsm` 1366 to 667 misclassified; a
-    /// tessellated cylinder's shadow edges in `tests/render_spsm.rs`) but
-    /// adds more false shadow than it removes elsewhere (first 20 default
-    /// lights: `focused+spsm` 1339 to 2074, `optimized+spsm` 690 to 739;
-    /// see the issue-16 note, session 7).
+    /// Inner-edge continuation (issue 16, sessions 7 and 9): the pass
+    /// finds each stored triangle's inner edges (the mesh continues across
+    /// them on the light's side; from the scene's edge adjacency) and, for
+    /// a small facet, stores where each neighbour's opposite vertex lies
+    /// (the texel's compact format, `shaders/spsm_common.wgsl`); a receiver
+    /// outside the facet but inside a neighbour (grown to 3x its height
+    /// over the edge on curved meshes, 2x on flat ones), far enough behind
+    /// the facet's plane, is shadowed: a tessellated curved caster's thin
+    /// outer facets, which lose every texel to the facet nearer the light,
+    /// then still cast their shadow edges. On in [`Self::PAPER`] since
+    /// session 9 (default preset, first 20 lights: `focused+spsm` 1338 to
+    /// 1240 misclassified, `optimized+spsm` 692 to 616; session 7's
+    /// unbounded continuation lost: 2074 and 739).
     pub inner_edges: bool,
 }
 
@@ -131,15 +130,16 @@ impl SpsmOptions {
     /// The default: the paper's bias (1e-5) with the packing tolerance,
     /// the log-polar derivative code ([`GradientCode::LogPolar`]; the
     /// paper's power code lost whole shadows under scene-optimized
-    /// matrices, see [`GradientCode`]) and the hybrid
-    /// [`StandardFallback::Uncertain`].
+    /// matrices, see [`GradientCode`]), the hybrid
+    /// [`StandardFallback::Uncertain`] and the
+    /// [`inner_edges`](Self::inner_edges) continuation.
     pub const PAPER: Self = Self {
         gradient_code: GradientCode::LogPolar,
         bias: 1e-5,
         packing_tolerance: true,
         thin_casters: false,
         standard_fallback: StandardFallback::Uncertain,
-        inner_edges: false,
+        inner_edges: true,
     };
 
     /// [`Self::PAPER`] without the [`standard_fallback`](Self::standard_fallback)

@@ -204,6 +204,37 @@ pub fn pack(
     ]
 }
 
+/// Bits 30..26 of word x of a compact texel (`shaders/spsm_common.wgsl`,
+/// [`SpsmOptions::inner_edges`](super::SpsmOptions::inner_edges)): v0.y's
+/// f16 exponent all ones, which plain offsets never have.
+pub const COMPACT_MARK: u32 = 0x7c00_0000;
+
+/// Logical bits `[l, l + n)` of a compact texel's payload: the 96 bits of
+/// words x, y, z without the marker's bits 26..30 (`spsm_field_get`).
+fn compact_field(words: [u32; 3], l: u32, n: u32) -> u32 {
+    let bit = |b: u32| (words[(b / 32) as usize] >> (b % 32)) & 1;
+    (0..n).fold(0, |v, i| {
+        let logical = l + i;
+        let physical = if logical >= 26 { logical + 5 } else { logical };
+        v | bit(physical) << i
+    })
+}
+
+/// The three vertex offsets of a compact texel (11-bit fixed point over
+/// `[-4, 4)`, from logical bit 24).
+#[must_use]
+pub fn compact_offsets(words: [u32; 3]) -> [DVec2; 3] {
+    let coordinate = |l: u32| f64::from(compact_field(words, l, 11)) / 256.0 - 4.0;
+    [24, 46, 68].map(|l| DVec2::new(coordinate(l), coordinate(l + 11)))
+}
+
+/// The 8-bit inner-edge codes of a compact texel (edge k in bits
+/// 8k..8k+7; `spsm_edge_code`).
+#[must_use]
+pub fn compact_codes(words: [u32; 3]) -> u32 {
+    compact_field(words, 0, 24)
+}
+
 /// Decodes a texel at `texel`; `None` without a triangle.
 #[must_use]
 pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], code: GradientCode) -> Option<DecodedTexel> {
@@ -216,8 +247,14 @@ pub fn unpack(words: [u32; 4], texel: [u32; 2], map: [u32; 2], code: GradientCod
         let y = half::f16::from_bits((w >> 16) as u16).to_f64();
         centre + DVec2::new(x, y)
     };
+    let vertices = if words[0] & COMPACT_MARK == COMPACT_MARK {
+        let offsets = compact_offsets([words[0], words[1], words[2]]);
+        offsets.map(|o| centre + o)
+    } else {
+        [vertex(words[0]), vertex(words[1]), vertex(words[2])]
+    };
     Some(DecodedTexel {
-        vertices: [vertex(words[0]), vertex(words[1]), vertex(words[2])],
+        vertices,
         depth: decode_depth(words[3] >> 16),
         gradient: decode_gradient(words[3] & 0xffff, map, code),
     })
@@ -409,5 +446,35 @@ mod tests {
         assert!(texel_touches(tri, [5, 0], 0.0));
         assert!(!texel_touches(tri, [5, 1], 0.0));
         assert!(!texel_touches(tri, [5, 1], -0.01));
+    }
+
+    /// The compact texel's layout as `spsm_field_put` / `spsm_pack_compact`
+    /// write it: codes from logical bit 0, offsets from 24, the marker's
+    /// bits 26..30 of word x skipped.
+    #[test]
+    fn compact_texel_round_trips() {
+        let put = |words: &mut [u32; 3], l: u32, n: u32, value: u32| {
+            for i in 0..n {
+                let logical = l + i;
+                let physical = if logical >= 26 { logical + 5 } else { logical };
+                words[(physical / 32) as usize] |= ((value >> i) & 1) << (physical % 32);
+            }
+        };
+        let offsets = [DVec2::new(-3.99, 0.5), DVec2::new(1.25, -2.0), DVec2::new(3.98, 3.5)];
+        let mut words = [COMPACT_MARK, 0, 0];
+        put(&mut words, 0, 24, 0x00a5_1f3c);
+        for (k, o) in offsets.iter().enumerate() {
+            let fixed = |v: f64| ((v + 4.0) * 256.0).round().clamp(0.0, 2047.0) as u32;
+            put(&mut words, 24 + 22 * k as u32, 11, fixed(o.x));
+            put(&mut words, 35 + 22 * k as u32, 11, fixed(o.y));
+        }
+        assert_eq!(words[0] & COMPACT_MARK, COMPACT_MARK);
+        assert_eq!(compact_codes(words), 0x00a5_1f3c);
+        for (a, b) in offsets.iter().zip(compact_offsets(words)) {
+            assert!((*a - b).abs().max_element() <= 0.5 / 256.0 + 1e-12, "{a} vs {b}");
+        }
+        let decoded =
+            unpack([words[0], words[1], words[2], 0x8000_0101], [3, 4], [8, 8], GradientCode::LogPolar).unwrap();
+        assert!((decoded.vertices[1] - DVec2::new(4.75, 2.5)).length() < 1e-9);
     }
 }
