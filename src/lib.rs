@@ -67,6 +67,8 @@ pub mod render;
 mod scene;
 pub mod score;
 pub mod synthetic;
+#[cfg(test)]
+mod test_rng;
 mod tolerance;
 #[cfg(feature = "view")]
 pub mod view;

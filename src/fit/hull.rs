@@ -293,13 +293,7 @@ mod tests {
     /// plain monotone chain on large inputs of several shapes.
     #[test]
     fn thinning_keeps_the_hull() {
-        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::test_rng::unit(0x9E37_79B9_7F4A_7C15_u64);
         for case in 0..200 {
             let n = 65 + case * 37;
             let points: Vec<DVec2> = (0..n)

@@ -530,13 +530,7 @@ mod tests {
     /// (beyond the kept 32 too), slivers and regular polygons (all tied).
     #[test]
     fn kept_caliper_visits_pick_the_edge_of_a_second_pass() {
-        let mut state = 0x853c_49e6_748f_ea9b_u64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::test_rng::unit(0x853c_49e6_748f_ea9b_u64);
         for case in 0..600 {
             let n = 3 + case % 58;
             let points: Vec<_> = match case % 3 {

@@ -1083,13 +1083,7 @@ mod tests {
     /// along faces (on-plane vertices and edges), thick tolerances, slivers.
     #[test]
     fn cap_boundary_fast_path_equals_reference() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::test_rng::unit(0x2545_f491_4f6c_dd1d_u64);
         let (mut fast, mut reference) = (ClipWorkspace::default(), ClipWorkspace::default());
         reference.reference_boundary = true;
         let mut cuts = 0;
@@ -1140,13 +1134,7 @@ mod tests {
     /// repeated edge (the last face wins) and out of range.
     #[test]
     fn half_edges_equal_the_edge_map() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::test_rng::unit(0x9e37_79b9_7f4a_7c15_u64);
         let (mut half, mut map, mut workspace) = (HalfEdges::default(), IndexMap::default(), ClipWorkspace::default());
         let mut check = |body: &ConvexPolyhedron, half: &mut HalfEdges| {
             half.build(body.vertices.len(), &body.faces, &body.indices);

@@ -929,9 +929,7 @@ mod tests {
     fn pack_bytes_puts_byte_i_on_bit_i() {
         let mut state = 0x2545_f491_4f6c_dd1du64;
         for _ in 0..1000 {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            state = crate::test_rng::step(state);
             let bytes: [u8; 64] = std::array::from_fn(|i| u8::from(state >> i & 1 != 0));
             assert_eq!(pack_bytes(&bytes), state);
         }
@@ -964,9 +962,7 @@ mod tests {
                 // Sparse single bits, so that a missed neighbour shows.
                 let src: Vec<u64> = (0..w * h)
                     .map(|_| {
-                        state ^= state << 13;
-                        state ^= state >> 7;
-                        state ^= state << 17;
+                        state = crate::test_rng::step(state);
                         if state % 4 == 0 {
                             1 << (state >> 58)
                         } else {
@@ -995,9 +991,7 @@ mod tests {
             for h in 1..=4 {
                 let pixels: Vec<u64> = (0..w * h)
                     .map(|_| {
-                        state ^= state << 13;
-                        state ^= state >> 7;
-                        state ^= state << 17;
+                        state = crate::test_rng::step(state);
                         u64::from(state % 5 == 0)
                     })
                     .collect();

@@ -74,13 +74,8 @@ mod tests {
     /// points a rounding away from an edge.
     #[test]
     fn lanes_answer_as_the_scalar_tests() {
-        let mut state = 0x1234_5678_9ABC_DEF1_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut unit = crate::test_rng::unit(0x1234_5678_9ABC_DEF1_u64);
+        let mut next = move || unit() * 2.0 - 1.0;
         let h = DMat3::from_cols_array(&[0.9, 0.1, 0.05, -0.2, 1.1, -0.03, 0.01, 0.02, 1.0]);
         let m = DMat4::from_cols(
             DVec4::new(0.9, 0.1, 0.3, 0.05),

@@ -252,13 +252,8 @@ mod tests {
     /// the light (`w ≤ 0`), edge-on ones (`det = 0`) and NaN.
     #[test]
     fn lanes_equal_one_sample_at_a_time() {
-        let mut state = 0x2545_F491_4F6C_DD1D_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut unit = crate::test_rng::unit(0x2545_F491_4F6C_DD1D_u64);
+        let mut next = move || unit() * 2.0 - 1.0;
         let g = DMat3::from_cols_array(&[300.0, 20.0, 0.1, -15.0, 280.0, 0.2, 40.0, -30.0, 1.0]).transpose();
         let mut v = || DVec3::new(next(), next(), next());
         let mut samples: Vec<BoundarySample> = (0..4000)
