@@ -33,6 +33,13 @@
 //    when its box meets the footprint.
 
 const TILE: u32 = 8u;
+// Prepended by gpu.rs: LIST_TILE, the side of the list tiles in texels
+// (a divisor of TILE), and PER_TILE = TILE / LIST_TILE. Each TILE x TILE
+// tile's triangles are kept in PER_TILE^2 lists, one per LIST_TILE x
+// LIST_TILE list tile, so that a pixel scans the entries of the list tiles
+// its footprint touches (fewer, since the lists are narrower). Activity
+// and the width limit stay per TILE tile: which pixels the exact path
+// serves does not change.
 // Footprints touching more tiles than this take the standard bit (counted).
 const MAX_FOOTPRINT_TILES: u32 = 36u;
 const ALL_SAMPLES: u32 = 0xffffffffu;
@@ -54,6 +61,8 @@ const STAT_QUEUE: u32 = 5u;
 // Pixels queued because their depth compare is uncertain (no silhouette
 // texel in the footprint).
 const STAT_UNCERTAIN: u32 = 6u;
+// List entries the exact path read (culled or tested).
+const STAT_SCANNED: u32 = 7u;
 const STATS_PER_LIGHT: u32 = 8u;
 
 struct AaParams {
@@ -71,7 +80,8 @@ struct AaParams {
     map_h: u32,
     // Index of the summed-area table in `map_words` (after the mask).
     sat_base: u32,
-    // Tiles per section of `tile_words` (count, cursor, offset).
+    // List tiles (LIST_TILE) per section of `tile_words` (count, cursor,
+    // offset; the forced flags, per TILE tile, fit too).
     tile_stride: u32,
     // Index of the triangles' boxes in `tile_list` (after the lists).
     box_base: u32,
@@ -133,16 +143,36 @@ struct Edge {
 
 const STATS_WORDS: u32 = 256u;
 
-fn count_slot(tile: u32) -> u32 {
-    return STATS_WORDS + tile;
+// The count, cursor and offset of list tile `list` (`list_index`).
+fn count_slot(list: u32) -> u32 {
+    return STATS_WORDS + list;
 }
 
-fn cursor_slot(tile: u32) -> u32 {
-    return STATS_WORDS + params.tile_stride + tile;
+fn cursor_slot(list: u32) -> u32 {
+    return STATS_WORDS + params.tile_stride + list;
 }
 
-fn offset_slot(tile: u32) -> u32 {
-    return STATS_WORDS + 2u * params.tile_stride + tile;
+fn offset_slot(list: u32) -> u32 {
+    return STATS_WORDS + 2u * params.tile_stride + list;
+}
+
+fn lists_x() -> u32 {
+    return (params.map_w + LIST_TILE - 1u) / LIST_TILE;
+}
+
+fn lists_y() -> u32 {
+    return (params.map_h + LIST_TILE - 1u) / LIST_TILE;
+}
+
+fn list_index(list: vec2<i32>) -> u32 {
+    return u32(list.y) * lists_x() + u32(list.x);
+}
+
+// The list tiles of TILE tiles `t` (xy first, zw last), clamped into the
+// map's list tiles.
+fn tiles_lists(t: vec4<i32>) -> vec4<i32> {
+    let last = vec2<i32>(i32(lists_x()) - 1, i32(lists_y()) - 1);
+    return vec4<i32>(t.xy * PER_TILE, min(t.zw * PER_TILE + vec2<i32>(PER_TILE - 1), last));
 }
 
 // Non-zero when an uncertain pixel's footprint touches the tile.
@@ -350,9 +380,10 @@ fn texel_of(p: vec2<f32>) -> vec2<i32> {
     return vec2<i32>(clamp(floor(p), vec2<f32>(0.0), last));
 }
 
-// The tiles a triangle's box (grown by a texel) touches: xy the first, zw
-// the last; empty (z < x) when it misses the map or lies behind the light.
-fn triangle_tiles(b: vec4<f32>) -> vec4<i32> {
+// The list tiles a triangle's box (grown by a texel) touches: xy the
+// first, zw the last; empty (z < x) when it misses the map or lies behind
+// the light.
+fn triangle_lists(b: vec4<f32>) -> vec4<i32> {
     let empty = vec4<i32>(0, 0, -1, -1);
     let size = map_size();
     if b.z < b.x || any(b.zw < vec2<f32>(-1.0)) || any(b.xy > size + vec2<f32>(1.0)) {
@@ -360,7 +391,39 @@ fn triangle_tiles(b: vec4<f32>) -> vec4<i32> {
     }
     let a = texel_of(b.xy - vec2<f32>(1.0));
     let c = texel_of(b.zw + vec2<f32>(1.0));
-    return vec4<i32>(a / i32(TILE), c / i32(TILE));
+    return vec4<i32>(a / i32(LIST_TILE), c / i32(LIST_TILE));
+}
+
+// Adds triangle `t` to the lists `r` (list tiles, `triangle_lists`) of
+// active TILE tiles: counts them (`write` false) or writes them.
+fn enter_lists(t: u32, r: vec4<i32>, write: bool) {
+    if r.z < r.x {
+        return;
+    }
+    for (var ty = r.y / PER_TILE; ty <= r.w / PER_TILE; ty++) {
+        for (var tx = r.x / PER_TILE; tx <= r.z / PER_TILE; tx++) {
+            if !tile_active(vec2<i32>(tx, ty)) {
+                continue;
+            }
+            let lo = max(r.xy, vec2<i32>(tx, ty) * PER_TILE);
+            let hi = min(r.zw, vec2<i32>(tx, ty) * PER_TILE + vec2<i32>(PER_TILE - 1));
+            for (var ly = lo.y; ly <= hi.y; ly++) {
+                for (var lx = lo.x; lx <= hi.x; lx++) {
+                    let list = list_index(vec2<i32>(lx, ly));
+                    if !write {
+                        atomicAdd(&tile_words[count_slot(list)], 1u);
+                        continue;
+                    }
+                    let slot = atomicLoad(&tile_words[offset_slot(list)]) + atomicAdd(&tile_words[cursor_slot(list)], 1u);
+                    // Past the capacity: dropped; the tile's pixels see the
+                    // overflow and keep the standard bit.
+                    if slot < params.capacity {
+                        tile_list[slot] = t;
+                    }
+                }
+            }
+        }
+    }
 }
 
 fn stored_box(t: u32) -> vec4<f32> {
@@ -413,21 +476,14 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     let b = triangle_box(t);
     store_box(params.box_base + 4u * t, b);
     store_box(params.screen_base + 4u * t, screen_box(t));
-    let r = triangle_tiles(b);
-    for (var ty = r.y; ty <= r.w; ty++) {
-        for (var tx = r.x; tx <= r.z; tx++) {
-            if tile_active(vec2<i32>(tx, ty)) {
-                atomicAdd(&tile_words[count_slot(u32(ty) * params.tiles_x + u32(tx))], 1u);
-            }
-        }
-    }
+    enter_lists(t, triangle_lists(b), false);
 }
 
 // One invocation: the exclusive prefix sum of the tile counts.
 @compute @workgroup_size(1)
 fn tile_scan() {
     var run = 0u;
-    for (var i = 0u; i < params.tiles_x * params.tiles_y; i++) {
+    for (var i = 0u; i < lists_x() * lists_y(); i++) {
         atomicStore(&tile_words[offset_slot(i)], run);
         run += atomicLoad(&tile_words[count_slot(i)]);
     }
@@ -440,20 +496,7 @@ fn tile_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if t >= params.triangle_count {
         return;
     }
-    let r = triangle_tiles(stored_box(t));
-    for (var ty = r.y; ty <= r.w; ty++) {
-        for (var tx = r.x; tx <= r.z; tx++) {
-            if tile_active(vec2<i32>(tx, ty)) {
-                let tile = u32(ty) * params.tiles_x + u32(tx);
-                let slot = atomicLoad(&tile_words[offset_slot(tile)]) + atomicAdd(&tile_words[cursor_slot(tile)], 1u);
-                // Past the capacity: dropped; the tile's pixels see the
-                // overflow and keep the standard bit.
-                if slot < params.capacity {
-                    tile_list[slot] = t;
-                }
-            }
-        }
-    }
+    enter_lists(t, triangle_lists(stored_box(t)), true);
 }
 
 // The table's mask of line (a, b, c): samples s with a s.x + b s.y + c >= 0
@@ -675,6 +718,14 @@ fn footprint_tiles(fp: Footprint) -> vec4<i32> {
     return vec4<i32>(ta, tb);
 }
 
+// The list tiles of a footprint that meets the map (as `footprint_tiles`).
+fn footprint_lists(fp: Footprint) -> vec4<i32> {
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    let ta = clamp(vec2<i32>(floor(fp.lo)), vec2<i32>(0), last) / i32(LIST_TILE);
+    let tb = clamp(vec2<i32>(floor(fp.hi)), vec2<i32>(0), last) / i32(LIST_TILE);
+    return vec4<i32>(ta, tb);
+}
+
 // Why a footprint's tiles cannot serve the exact path: 0 they can;
 // STAT_WIDE (too many tiles, or one without a list); STAT_OVERFLOW (a list
 // did not fit).
@@ -684,24 +735,28 @@ fn tiles_unusable(t: vec4<i32>) -> u32 {
     }
     for (var ty = t.y; ty <= t.w; ty++) {
         for (var tx = t.x; tx <= t.z; tx++) {
-            let tile = u32(ty) * params.tiles_x + u32(tx);
             if !tile_active(vec2<i32>(tx, ty)) {
                 return STAT_WIDE;
             }
-            if atomicLoad(&tile_words[offset_slot(tile)]) + atomicLoad(&tile_words[count_slot(tile)]) > params.capacity {
-                return STAT_OVERFLOW;
-            }
         }
+    }
+    // The lists are laid out in index order: of the tiles' lists, the one
+    // of the highest index ends furthest.
+    let r = tiles_lists(t);
+    let list = list_index(r.zw);
+    if atomicLoad(&tile_words[offset_slot(list)]) + atomicLoad(&tile_words[count_slot(list)]) > params.capacity {
+        return STAT_OVERFLOW;
     }
     return 0u;
 }
 
-// Whether list entry `tri` of tile `tile` is tested for a footprint
+// Whether list entry `tri` of list tile `tile` is tested for a footprint
 // [lo, hi] (texels): the triangle's box grown by the lists' texel meets it,
-// and `tile` is the tile of the overlap's low corner. That tile is one of
-// the footprint's tiles and lists the triangle (its box's tiles hold the
-// corner too), so every triangle whose box meets the footprint is tested
-// exactly once. Always true with culling off (`params.cull` 0).
+// and `tile` is the list tile of the overlap's low corner. That list tile
+// is one of the footprint's and lists the triangle (its box's list tiles
+// hold the corner too, and the corner's TILE tile is one of the
+// footprint's, all active), so every triangle whose box meets the footprint
+// is tested exactly once. Always true with culling off (`params.cull` 0).
 fn entry_meets(tri: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) -> bool {
     if params.cull == 0u {
         return true;
@@ -712,13 +767,13 @@ fn entry_meets(tri: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) -> bool 
     if any(blo > hi) || any(bhi < lo) {
         return false;
     }
-    return all(texel_of(max(blo, lo)) / i32(TILE) == tile);
+    return all(texel_of(max(blo, lo)) / i32(LIST_TILE) == tile);
 }
 
 // The unit geometric normal of a triangle holding the pixel's point (the
-// origin; `p` its texel position inside footprint tiles `t`), turned
+// origin; `p` its texel position inside footprint list tiles `t`), turned
 // towards `n`; `n` when none does. With culling on only triangles whose box
-// (grown by a texel) holds `p`, in `p`'s tile, are tried: a triangle within
+// (grown by a texel) holds `p`, in `p`'s list tile, are tried: a triangle within
 // `tol` of the point projects within a texel of it unless `tol` exceeds a
 // texel. Of several such triangles (a shared edge or vertex) the one of the
 // lowest index: the tile lists' order comes from atomics and differs from
@@ -726,16 +781,16 @@ fn entry_meets(tri: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) -> bool 
 fn face_normal(t_in: vec4<i32>, p: vec2<f32>, point: vec3<f32>, n: vec3<f32>, tol: f32) -> vec3<f32> {
     var t = t_in;
     if params.cull != 0u {
-        let own = texel_of(p) / i32(TILE);
+        let own = texel_of(p) / i32(LIST_TILE);
         t = vec4<i32>(own, own);
     }
     var best = 0xffffffffu;
     var normal = n;
     for (var ty = t.y; ty <= t.w; ty++) {
         for (var tx = t.x; tx <= t.z; tx++) {
-            let tile = u32(ty) * params.tiles_x + u32(tx);
-            let start = atomicLoad(&tile_words[offset_slot(tile)]);
-            let count = atomicLoad(&tile_words[count_slot(tile)]);
+            let list = list_index(vec2<i32>(tx, ty));
+            let start = atomicLoad(&tile_words[offset_slot(list)]);
+            let count = atomicLoad(&tile_words[count_slot(list)]);
             for (var k = 0u; k < count; k++) {
                 let tri = tile_list[start + k];
                 if tri >= best || !entry_meets(tri, vec2<i32>(tx, ty), p, p) {
@@ -978,8 +1033,9 @@ fn on_screen_near(tri: u32, xy: vec2<f32>) -> bool {
     return all(b.xy <= xy + vec2<f32>(1.25)) && all(b.zw >= xy - vec2<f32>(0.25));
 }
 
-// The exact path, one invocation per queued pixel (the dispatch covers
-// every pixel; invocations past the queue's length return at once).
+// The exact path, one invocation per queued pixel (an indirect dispatch
+// sized by `exact_args` in gpu.rs; the last workgroup's invocations past
+// the queue's length return at once).
 @compute @workgroup_size(64)
 fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let slot = flat_id(gid, groups);
@@ -996,13 +1052,12 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     let n = pixel.n;
     var facet = pixel.facet;
     var fp = pixel.fp;
-    var t = pixel.t;
     // Then Pan et al.'s facet: the plane of the triangle holding the
     // pixel's point (found among its tiles' triangles), when its footprint
     // is served by tiles as well.
     let centre = light.clip_from_world * vec4<f32>(point, 1.0);
     let p = clamp(to_texel(centre), fp.lo, fp.hi);
-    let face = face_normal(t, p, point, n, params.bias + 0.01 * fp.diameter);
+    let face = face_normal(footprint_lists(fp), p, point, n, params.bias + 0.01 * fp.diameter);
     if any(face != n) {
         let f = facet_cols(face, eye, rays[0], rays[1], rays[2]);
         if f.ok {
@@ -1011,7 +1066,6 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
             if g.ok && gt.x <= gt.z && tiles_unusable(gt) == 0u {
                 facet = f;
                 fp = g;
-                t = gt;
             }
         }
     }
@@ -1028,13 +1082,16 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     var occluded = 0u;
     var hidden = 0u;
     var tests = 0u;
-    for (var ty = t.y; ty <= t.w; ty++) {
-        for (var tx = t.x; tx <= t.z; tx++) {
-            let tile = u32(ty) * params.tiles_x + u32(tx);
-            let start = atomicLoad(&tile_words[offset_slot(tile)]);
-            let count = atomicLoad(&tile_words[count_slot(tile)]);
+    var scanned = 0u;
+    let lists = footprint_lists(fp);
+    for (var ty = lists.y; ty <= lists.w; ty++) {
+        for (var tx = lists.x; tx <= lists.z; tx++) {
+            let list = list_index(vec2<i32>(tx, ty));
+            let start = atomicLoad(&tile_words[offset_slot(list)]);
+            let count = atomicLoad(&tile_words[count_slot(list)]);
             for (var k = 0u; k < count; k++) {
                 let tri = tile_list[start + k];
+                scanned += 1u;
                 if !entry_meets(tri, vec2<i32>(tx, ty), fp.lo, fp.hi) {
                     continue;
                 }
@@ -1054,6 +1111,7 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     }
     add_stat(STAT_EXACT, 1u);
     add_stat(STAT_TESTS, tests);
+    add_stat(STAT_SCANNED, scanned);
     let pixels = params.width * params.height;
     let out = params.light * pixels + id;
     occlusion[out] = occluded & params.sample_mask;

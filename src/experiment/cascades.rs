@@ -151,6 +151,7 @@ impl Runner<'_> {
             s.wide_pixels += t.wide_pixels;
             s.uncertain_pixels += t.uncertain_pixels;
             s.triangle_tests = s.triangle_tests.saturating_add(t.triangle_tests);
+            s.entries_scanned = s.entries_scanned.saturating_add(t.entries_scanned);
         }
         Ok(s)
     }

@@ -16,7 +16,7 @@
 //!
 //! **Overflow policy**: the triangle–tile lists hold at most
 //! [`PAIR_CAPACITY`] entries per light; a pixel whose footprint touches a
-//! tile whose list did not fit keeps the standard bit in every sample and
+//! list tile whose list did not fit keeps the standard bit in every sample and
 //! is counted in [`AaStats::overflow_pixels`]. A footprint touching more
 //! than 36 tiles, or a tile without silhouette texels nearby (footprints
 //! wider than a tile), does the same, counted in [`AaStats::wide_pixels`].
@@ -37,8 +37,12 @@ use crate::LightMatrix;
 
 /// Entries of one light's triangle–tile lists (16 MiB of `u32`).
 pub const PAIR_CAPACITY: u32 = 1 << 22;
-/// Tile side in map texels (`TILE` in the shader).
+/// Tile side in map texels (`TILE` in the shader): a tile's activity and
+/// the footprint width limit.
 const TILE: u32 = 8;
+/// Side of the list tiles in map texels (`LIST_TILE` in the shader): the
+/// triangle lists are kept per list tile, (TILE / LIST_TILE)² per tile.
+const LIST_TILE: u32 = 4;
 /// Statistics words per light (`STATS_PER_LIGHT`) and their block.
 const STATS_PER_LIGHT: usize = 8;
 const STATS_WORDS: u64 = 256;
@@ -46,6 +50,30 @@ const STATS_WORDS: u64 = 256;
 const PARAM_STRIDE: u64 = 256;
 /// Workgroup size of the flat passes.
 const GROUP: u32 = 64;
+/// Bytes of one light's indirect dispatch arguments for `visibility_exact`.
+const ARGS_STRIDE: u64 = 16;
+
+/// Turns light `params.light`'s exact-path queue length (statistics word
+/// `STAT_QUEUE`, 5, of `tile_words`) into `visibility_exact`'s indirect
+/// dispatch arguments: one invocation per queued pixel in workgroups of 64,
+/// 2D beyond the per-dimension limit (`flat_id`). A module of its own: the
+/// arguments buffer must not be bound to the dispatch that reads it as
+/// arguments, and every binding of the passes' group 1 is.
+const ARGS_SHADER: &str = "
+struct Light { light: u32 }
+@group(0) @binding(0) var<uniform> params: Light;
+@group(0) @binding(1) var<storage, read> stats: array<u32>;
+@group(0) @binding(2) var<storage, read_write> args: array<u32>;
+
+@compute @workgroup_size(1)
+fn exact_args() {
+    let groups = (stats[params.light * 8u + 5u] + 63u) / 64u;
+    let a = params.light * 4u;
+    args[a] = min(groups, 65535u);
+    args[a + 1u] = (groups + 65534u) / 65535u;
+    args[a + 2u] = 1u;
+}
+";
 
 /// What the antialiased passes did for one light of the last frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -70,6 +98,12 @@ pub struct AaStats {
     /// compare is uncertain (the map's depth within the bias band of the
     /// receiver's, or a degenerate footprint).
     pub uncertain_pixels: u32,
+    /// List entries the exact path read, all pixels together (the entries
+    /// of the footprints' list tiles, culled or tested, up to a pixel's
+    /// early stop; so run-dependent as
+    /// [`triangle_tests`](Self::triangle_tests)): the exact path's cost
+    /// follows it on lavapipe.
+    pub entries_scanned: u32,
 }
 
 #[repr(C)]
@@ -166,6 +200,11 @@ pub(crate) struct AaPass {
     /// silhouette, sat_rows, sat_cols, tile_count_pass, tile_scan, tile_write, visibility,
     /// visibility_exact, classify.
     pipelines: Vec<wgpu::ComputePipeline>,
+    /// `exact_args` (`ARGS_SHADER`), its bind group layout and the
+    /// arguments buffer (ARGS_STRIDE bytes per light).
+    args_pipeline: wgpu::ComputePipeline,
+    args_group: wgpu::BindGroupLayout,
+    args: wgpu::Buffer,
     edges: wgpu::Buffer,
     edge_count: u32,
     table: wgpu::Buffer,
@@ -267,9 +306,11 @@ impl AaPass {
         });
         // common.wgsl's `shade` calls a lookup's `in_shadow`: a stub here.
         let source = format!(
-            "{}{}fn in_shadow(light: Light, world: vec3<f32>) -> bool {{ return false; }}\n{}",
+            "{}{}fn in_shadow(light: Light, world: vec3<f32>) -> bool {{ return false; }}\n\
+             const LIST_TILE: u32 = {LIST_TILE}u;\nconst PER_TILE: i32 = {};\n{}",
             include_str!("../../../shaders/light_depth.wgsl"),
             include_str!("../../../shaders/common.wgsl"),
+            TILE / LIST_TILE,
             include_str!("../../../shaders/aa_passes.wgsl"),
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -289,6 +330,31 @@ impl AaPass {
                 })
             })
             .collect();
+        let args_group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lixel aa exact_args group"),
+            entries: &[uniform(0, true), storage(1, true), storage(2, false)],
+        });
+        let args_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("lixel aa exact_args"),
+            layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("lixel aa exact_args layout"),
+                bind_group_layouts: &[Some(&args_group)],
+                immediate_size: 0,
+            })),
+            module: &device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("lixel aa exact_args"),
+                source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(ARGS_SHADER)),
+            }),
+            entry_point: Some("exact_args"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lixel aa visibility_exact dispatch arguments"),
+            size: ARGS_STRIDE * crate::render::MAX_LIGHTS as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
         let records = edge_records(mesh);
         // A zero-sized storage binding is invalid: keep one (unused) record.
         let padded = if records.is_empty() { vec![bytemuck::Zeroable::zeroed()] } else { records.clone() };
@@ -312,6 +378,9 @@ impl AaPass {
             group0,
             group1,
             pipelines,
+            args_pipeline,
+            args_group,
+            args,
             edges,
             edge_count: records.len() as u32,
             table,
@@ -366,8 +435,8 @@ impl AaPass {
             lights,
             triangles,
             map_words: buffer("lixel aa mask and summed-area table", 2 * map_texels, true),
-            // The statistics, then per tile its count, cursor, offset and
-            // whether an uncertain pixel forced it active.
+            // The statistics, then per list tile its count, cursor, offset
+            // and per tile whether an uncertain pixel forced it active.
             tile_words: buffer("lixel aa statistics and tiles", STATS_WORDS + 4 * tiles, true),
             // The lists, each triangle's box in the map (4 f32), its box on
             // the screen (4 f32), then the queue of the exact path's pixels.
@@ -400,7 +469,7 @@ impl AaPass {
         let map_texels = lights.iter().map(|m| u64::from(m.map_size.width) * u64::from(m.map_size.height)).max();
         let tiles = lights
             .iter()
-            .map(|m| u64::from(m.map_size.width.div_ceil(TILE)) * u64::from(m.map_size.height.div_ceil(TILE)))
+            .map(|m| u64::from(m.map_size.width.div_ceil(LIST_TILE)) * u64::from(m.map_size.height.div_ceil(LIST_TILE)))
             .max();
         let pixels = u64::from(width) * u64::from(height);
         let (vertices, indices, triangles) = scene;
@@ -443,6 +512,29 @@ impl AaPass {
                 Self::buffer(8, &sized.occlusion),
                 wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(masks) },
                 wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::TextureView(maps) },
+            ],
+        });
+        let args_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lixel aa exact_args group"),
+            layout: &self.args_group,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.params,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<ParamsRaw>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &sized.tile_words,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(4 * STATS_WORDS),
+                    }),
+                },
+                Self::buffer(2, &self.args),
             ],
         });
         encoder.clear_buffer(&sized.tile_words, 0, Some(4 * STATS_WORDS));
@@ -506,9 +598,16 @@ impl AaPass {
             pass.dispatch_workgroups(1, 1, 1);
             flat(&mut pass, 5, triangles);
             flat(&mut pass, 6, width * height);
-            // Over the queue: sized for every pixel, the invocations past the
-            // queue's length return at once (no indirect dispatch needed).
-            flat(&mut pass, 7, width * height);
+            // Over the queue only: its length, known on the GPU, becomes the
+            // dispatch's size (a dispatch over every pixel, the invocations
+            // past the queue returning at once, cost 8% of the aa32 frame).
+            pass.set_pipeline(&self.args_pipeline);
+            pass.set_bind_group(0, &args_group, &[(i as u64 * PARAM_STRIDE) as u32]);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&self.pipelines[7]);
+            pass.set_bind_group(0, &group0, &[]);
+            pass.set_bind_group(1, &group1, &[(i as u64 * PARAM_STRIDE) as u32]);
+            pass.dispatch_workgroups_indirect(&self.args, i as u64 * ARGS_STRIDE);
         }
         self.last = Some(LastFrame { width, height, lights: lights.len() });
     }
@@ -565,7 +664,7 @@ impl Renderer {
         if light >= last.lights {
             return Err(RenderError::NoSuchLight { light, count: last.lights });
         }
-        let w = self.read_buffer_words(&sized.tile_words, (light * STATS_PER_LIGHT) as u64, 7)?;
+        let w = self.read_buffer_words(&sized.tile_words, (light * STATS_PER_LIGHT) as u64, 8)?;
         Ok(AaStats {
             pairs: w[0],
             exact_pixels: w[1],
@@ -573,6 +672,7 @@ impl Renderer {
             wide_pixels: w[3],
             triangle_tests: w[4],
             uncertain_pixels: w[6],
+            entries_scanned: w[7],
         })
     }
 
