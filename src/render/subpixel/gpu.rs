@@ -67,6 +67,7 @@ struct Light { light: u32 }
 
 @compute @workgroup_size(1)
 fn exact_args() {
+    // Word STAT_QUEUE (5) of the light's STATS_PER_LIGHT (8) statistics.
     let groups = (stats[params.light * 8u + 5u] + 63u) / 64u;
     let a = params.light * 4u;
     args[a] = min(groups, 65535u);
@@ -101,8 +102,8 @@ pub struct AaStats {
     /// List entries the exact path read, all pixels together (the entries
     /// of the footprints' list tiles, culled or tested, up to a pixel's
     /// early stop; so run-dependent as
-    /// [`triangle_tests`](Self::triangle_tests)): the exact path's cost
-    /// follows it on lavapipe.
+    /// [`triangle_tests`](Self::triangle_tests)): the length of the exact
+    /// path's scan, a large part of its cost on lavapipe.
     pub entries_scanned: u32,
 }
 
