@@ -100,9 +100,10 @@ fn silhouette_mask_and_summed_area_match_the_cpu_reference() {
 }
 
 /// The pair count (triangle-tile list entries) equals a CPU count: each
-/// triangle's projected bounding box grown by a texel, its list tiles of
-/// 4x4 texels whose tile of 8x8 has a neighbourhood (grown by 16 texels)
-/// holding a silhouette texel of the GPU's own mask. f32 against f64 box corners may move a box edge
+/// triangle's projected bounding box grown by a texel, its list tiles
+/// (8x8 texels, `LIST_TILE` in gpu.rs) whose tile of 8x8 has a
+/// neighbourhood (grown by 16 texels) holding a silhouette texel of the
+/// GPU's own mask. f32 against f64 box corners may move a box edge
 /// across a tile border, so within 1%.
 #[test]
 fn pair_count_matches_a_cpu_count() {
@@ -135,9 +136,10 @@ fn pair_count_matches_a_cpu_count() {
         }
         let a = ((lo.x.floor() as i64 - 1).clamp(0, w - 1), (lo.y.floor() as i64 - 1).clamp(0, h - 1));
         let b = ((hi.x.floor() as i64 + 1).clamp(0, w - 1), (hi.y.floor() as i64 + 1).clamp(0, h - 1));
-        for ly in a.1 / 4..=b.1 / 4 {
-            for lx in a.0 / 4..=b.0 / 4 {
-                expected += u64::from(active(lx / 2, ly / 2));
+        const LIST: i64 = 8;
+        for ly in a.1 / LIST..=b.1 / LIST {
+            for lx in a.0 / LIST..=b.0 / LIST {
+                expected += u64::from(active(lx * LIST / 8, ly * LIST / 8));
             }
         }
     }

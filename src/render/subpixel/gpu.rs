@@ -42,7 +42,10 @@ pub const PAIR_CAPACITY: u32 = 1 << 22;
 const TILE: u32 = 8;
 /// Side of the list tiles in map texels (`LIST_TILE` in the shader): the
 /// triangle lists are kept per list tile, (TILE / LIST_TILE)² per tile.
-const LIST_TILE: u32 = 4;
+/// 8 (one list per tile): with 4 the exact path read half the entries (aa32
+/// CPU −12%) but missed a list row of one wide footprint on the paper preset
+/// on lavapipe (issue-18 note, session 10), cause not found.
+const LIST_TILE: u32 = 8;
 /// Statistics words per light (`STATS_PER_LIGHT`) and their block.
 const STATS_PER_LIGHT: usize = 8;
 const STATS_WORDS: u64 = 256;
