@@ -382,8 +382,10 @@ impl Classes {
             return;
         }
         self.one = false;
+        // `fill_classes` writes every cell: a buffer of the right size is
+        // reused as it is (zeroing half a megabyte at 180x180 first cost
+        // more than the rest of the class fill).
         for buffer in [&mut self.class64, &mut self.hor64] {
-            buffer.clear();
             buffer.resize(w * h, 0);
         }
         // In bands of `band_rows` rows (in parallel with rayon): a row's
@@ -552,7 +554,18 @@ pub(super) fn extract(
         band.active.clear();
         band.surfaces.clear();
         band.covered = 0;
-        for y in b * band_rows..((b + 1) * band_rows).min(h) {
+        let rows = b * band_rows..((b + 1) * band_rows).min(h);
+        if band.active.capacity() == 0 {
+            // A fresh workspace (every `from_readback_all`): a first guess
+            // at the band's active pixels, an eighth of its pixels, so that
+            // the lists do not start at a few entries and get copied a
+            // dozen times as they grow (counting them exactly first cost
+            // as much as the copies). A reused workspace has grown to fit.
+            let pixels = rows.len() * w;
+            band.active.reserve(pixels / 8);
+            band.surfaces.reserve(pixels / 32);
+        }
+        for y in rows {
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let row = m.y_axis * sy;
             let (class, near) = classes.row(y, w, h);
