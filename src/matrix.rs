@@ -246,6 +246,10 @@ pub(crate) struct AxisFit<'a> {
     pub map: ShadowMapSize,
     pub fit: &'a AffineFitOptions,
     pub tolerances: &'a Tolerances,
+    /// The points are a convex cone's edges in order around it (the
+    /// optimizer's extreme rays): the fit takes their hull without a sort
+    /// ([`FitWorkspace::fit_polygon`]; the same fit either way).
+    pub polygon: bool,
 }
 
 /// The homography `G` (NDC units, unit `j`) for optical axis `axis` that fits
@@ -266,7 +270,12 @@ pub(crate) fn fit_homography(
         return None;
     }
     let (e1, e2) = project_to_image_plane(j, xs.iter().copied(), scratch).ok()?;
-    let fit = workspace.fit(scratch, setup.map.width, setup.map.height, setup.fit).ok()?;
+    let fit = if setup.polygon {
+        workspace.fit_polygon(scratch, setup.map.width, setup.map.height, setup.fit)
+    } else {
+        workspace.fit(scratch, setup.map.width, setup.map.height, setup.fit)
+    }
+    .ok()?;
     let homography = fit.ndc_from_plane * DMat3::from_cols(e1, e2, j).transpose();
     holds_all(&homography, xs, setup.tolerances.coverage_slack).then_some(homography)
 }
@@ -355,7 +364,7 @@ impl Placement<'_> {
             return Err(LixelError::UnusableSamples { reason: "no points to fit the map around" });
         }
         let homography = fit_homography(
-            &AxisFit { frame: &self.frame, map: self.map, fit: self.fit, tolerances: self.tolerances },
+            &AxisFit { frame: &self.frame, map: self.map, fit: self.fit, tolerances: self.tolerances, polygon: false },
             self.axis,
             xs,
             fit,

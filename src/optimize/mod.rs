@@ -568,6 +568,8 @@ impl Optimizer {
             map: samples.problem.map_size(),
             fit: &fit,
             tolerances: samples.problem.tolerances(),
+            // The extreme rays are the relevant samples' hull, in order.
+            polygon: true,
         };
         let homography = fit_homography(&setup, axis, &self.extreme, &mut self.fit, &mut self.projected)?;
         let texel = objective::texel_homography(&homography, samples.problem.map_size());

@@ -90,11 +90,7 @@ impl SampleGroup {
         let column = |v: [DVec3; LANES]| {
             [[v[0].x, v[1].x, v[2].x, v[3].x], [v[0].y, v[1].y, v[2].y, v[3].y], [v[0].z, v[1].z, v[2].z, v[3].z]]
         };
-        Self {
-            light: column(s.map(|s| s.light)),
-            d_dx: column(s.map(|s| s.d_dx)),
-            d_dy: column(s.map(|s| s.d_dy)),
-        }
+        Self { light: column(s.map(|s| s.light)), d_dx: column(s.map(|s| s.d_dx)), d_dy: column(s.map(|s| s.d_dy)) }
     }
 }
 
