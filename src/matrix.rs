@@ -450,7 +450,6 @@ impl Placement<'_> {
         };
         let (x_row, y_row, w_row) = (g_row(0), g_row(1), g_row(2));
         let pad = self.tolerances.depth_pad;
-        let all_depth = || self.focus.iter().chain(self.depth_points);
         // The casters' range of the depth function: `w` or `d·x`.
         let depth_function = match self.frame {
             LightFrame::Perspective { .. } => w_row,
@@ -510,7 +509,9 @@ impl Placement<'_> {
         };
         let clip_from_world = DMat4::from_cols(x_row, y_row, z_row, w_row).transpose();
         let points = match self.frame {
-            LightFrame::Perspective { .. } => fold_range(all_depth().map(|&p| light_distance(&self.frame, p))),
+            LightFrame::Perspective { .. } => {
+                range_of(self.focus, self.depth_points, |p: &DVec3| light_distance(&self.frame, *p))
+            }
             // The same values as the depth function's (`light_distance`).
             LightFrame::Orthographic { .. } => depth_points,
         };
