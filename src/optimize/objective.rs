@@ -128,7 +128,7 @@ fn badness_group(g: &DMat3, s: &SampleGroup) -> [f64; LANES] {
     let (g1, g2, j) = (g.row(0), g.row(1), g.row(2));
     let dot = |r: DVec3, v: &[[f64; LANES]; 3], k: usize| (r.x * v[0][k]) + (r.y * v[1][k]) + (r.z * v[2][k]);
     let mut out = [0.0; LANES];
-    for k in 0..LANES {
+    for (k, out) in out.iter_mut().enumerate() {
         let (p, dx, dy) = (&s.light, &s.d_dx, &s.d_dy);
         let w = dot(j, p, k);
         let (a0, a1) = (dot(g1, p, k), dot(g2, p, k));
@@ -141,7 +141,7 @@ fn badness_group(g: &DMat3, s: &SampleGroup) -> [f64; LANES] {
         let det = j00 * j11 - j10 * j01;
         let frob = (j00 * j00 + j10 * j10) + (j01 * j01 + j11 * j11);
         let b = frob / (det * det);
-        out[k] = if !(w > 0.0) || det == 0.0 { f64::INFINITY } else { b };
+        *out = if !(w > 0.0) || det == 0.0 { f64::INFINITY } else { b };
     }
     out
 }
