@@ -99,6 +99,11 @@ impl ConvexPolyhedron {
         let reference = workspace.reference_boundary;
         #[cfg(not(test))]
         let reference = false;
+        if !reference {
+            if let Some(changed) = self.clip_small(plane, eps, out) {
+                return changed;
+            }
+        }
         let ClipWorkspace { dist, side, new_index, cuts, on_plane, edges, walker, .. } = workspace;
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
@@ -273,6 +278,171 @@ impl ConvexPolyhedron {
             out.finish_parts(new_index);
         }
         true
+    }
+}
+
+/// The most vertices (and cut points) [`ConvexPolyhedron::clip_small`]
+/// handles: one bit each in a `u64`.
+const SMALL: usize = 64;
+
+impl ConvexPolyhedron {
+    /// [`clip_core`](Self::clip_core)'s simple road for a body of at most
+    /// [`SMALL`] vertices, without its scratch buffers: the sides as bit
+    /// masks, the new indices, cut edges and cap links in small arrays, the
+    /// distances recomputed for the few crossed edges (the same expression,
+    /// so the same bits). Makes exactly what `clip_core` makes, in the same
+    /// order, or returns `None` (having perhaps written into `out`) where
+    /// that needs its general road: a vertex within `eps` of the plane (or a
+    /// NaN distance), more than [`SMALL`] vertices or cut points, a face
+    /// too short, or a cap boundary that is not one simple cycle of three
+    /// or more edges. `eps` is non-negative and the body is not empty.
+    fn clip_small(&self, plane: &Plane, eps: f64, out: &mut Self) -> Option<bool> {
+        let n = self.vertices.len();
+        if n > SMALL {
+            return None;
+        }
+        let (mut outside, mut inside) = (0u64, 0u64);
+        for (i, &v) in self.vertices.iter().enumerate() {
+            let d = plane.signed_distance(v);
+            outside |= u64::from(d > eps) << i;
+            inside |= u64::from(d < -eps) << i;
+        }
+        if outside == 0 {
+            return Some(false);
+        }
+        out.clear();
+        if inside == 0 {
+            return Some(true);
+        }
+        let all = if n == SMALL { u64::MAX } else { (1u64 << n) - 1 };
+        if (outside | inside) != all {
+            // A vertex on the plane (or a NaN distance).
+            return None;
+        }
+        let Self { vertices, faces, indices } = out;
+        let mut new_index = [0u8; SMALL];
+        for (i, &v) in self.vertices.iter().enumerate() {
+            if inside & (1u64 << i) != 0 {
+                new_index[i] = vertices.len() as u8;
+                vertices.push(v);
+            }
+        }
+        let kept = vertices.len();
+        // Cut `c` (vertex `kept + c`) lies on the edge `cut_keys[c]`
+        // (sorted pair packed); `link[c]` is the cap boundary's next cut
+        // after it (`u8::MAX`: none yet).
+        let mut cut_keys = [0u16; SMALL];
+        let mut link = [u8::MAX; SMALL];
+        let mut cut_count = 0usize;
+        // The cap boundary: its edge count and first vertex.
+        let mut boundary_len = 0usize;
+        let mut boundary_start = usize::MAX;
+        for face in &self.faces {
+            let loop_indices = &self.indices[face.start..face.end];
+            if loop_indices.len() < 3 {
+                return None;
+            }
+            let mut mask = 0u64;
+            for &a in loop_indices {
+                mask |= 1u64 << (a % SMALL);
+            }
+            if mask & outside == 0 {
+                let start = indices.len();
+                indices.extend(loop_indices.iter().map(|&a| usize::from(new_index[a % SMALL])));
+                faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+                continue;
+            }
+            if mask & inside == 0 {
+                continue;
+            }
+            let start = indices.len();
+            // The last cut pushed, if it is the last index pushed.
+            let mut last_cut = usize::MAX;
+            let is_out = |a: usize| outside & (1u64 << (a % SMALL)) != 0;
+            let first = loop_indices[0];
+            let (mut a, mut a_out) = (first, is_out(first));
+            for &b in loop_indices[1..].iter().chain(std::iter::once(&first)) {
+                let b_out = is_out(b);
+                if !a_out {
+                    indices.push(usize::from(new_index[a % SMALL]));
+                    last_cut = usize::MAX;
+                }
+                if a_out != b_out {
+                    let (i, j) = (a.min(b), a.max(b));
+                    let key = ((i as u16) << 8) | j as u16;
+                    let cut = match cut_keys[..cut_count].iter().position(|&k| k == key) {
+                        Some(c) => c,
+                        None => {
+                            if cut_count == SMALL {
+                                return None;
+                            }
+                            let (di, dj) = (plane.signed_distance(self.vertices[i]), plane.signed_distance(self.vertices[j]));
+                            let t = di / (di - dj);
+                            vertices.push(self.vertices[i].lerp(self.vertices[j], t));
+                            cut_keys[cut_count] = key;
+                            cut_count += 1;
+                            cut_count - 1
+                        }
+                    };
+                    if last_cut != usize::MAX {
+                        // The plane edge `last_cut → cut`, reversed on the cap.
+                        if link[cut] != u8::MAX {
+                            return None;
+                        }
+                        link[cut] = last_cut as u8;
+                        if boundary_len == 0 {
+                            boundary_start = cut;
+                        }
+                        boundary_len += 1;
+                    }
+                    indices.push(kept + cut);
+                    last_cut = cut;
+                }
+                (a, a_out) = (b, b_out);
+            }
+            // The closing edge, from the last cut to the first index when
+            // that is a cut too.
+            if last_cut != usize::MAX && indices[start] >= kept {
+                let cut = indices[start] - kept;
+                if link[cut] != u8::MAX {
+                    return None;
+                }
+                link[cut] = last_cut as u8;
+                if boundary_len == 0 {
+                    boundary_start = cut;
+                }
+                boundary_len += 1;
+            }
+            faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+        }
+        if boundary_len < 3 {
+            return None;
+        }
+        // The cap: one simple cycle through `boundary_len` cut points.
+        let start = indices.len();
+        let mut c = boundary_start;
+        loop {
+            indices.push(kept + c);
+            let next = link[c];
+            if next == u8::MAX {
+                return None;
+            }
+            if usize::from(next) == boundary_start {
+                break;
+            }
+            if indices.len() - start == boundary_len {
+                return None;
+            }
+            c = usize::from(next);
+        }
+        if indices.len() - start != boundary_len {
+            return None;
+        }
+        faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
+        if faces.len() < 4 || !vertices[kept..].iter().all(|v| v.is_finite()) {
+            out.clear();
+        }
+        Some(true)
     }
 }
 
