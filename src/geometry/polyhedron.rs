@@ -671,8 +671,12 @@ impl ConvexPolyhedron {
     /// `(a, b, removed face, other face)`, into `out`; `edge_faces` is
     /// scratch.
     fn silhouette(&self, removed: &[bool], edge_faces: &mut HalfEdges, out: &mut Vec<(usize, usize, usize, usize)>) {
-        edge_faces.build(self.vertices.len(), &self.faces, &self.indices);
         out.clear();
+        if self.silhouette_small(removed, out) {
+            return;
+        }
+        out.clear();
+        edge_faces.build(self.vertices.len(), &self.faces, &self.indices);
         for (f, face) in self.faces().enumerate().filter(|&(f, _)| removed[f]) {
             for (a, b) in face.edges() {
                 match edge_faces.face(b, a) {
@@ -681,6 +685,61 @@ impl ConvexPolyhedron {
                 }
             }
         }
+    }
+
+    /// [`silhouette`](Self::silhouette) for a small body (at most 64
+    /// vertices, fewer than 255 faces and directed edges), with the edges
+    /// chained by start vertex in stack arrays instead of [`HalfEdges`]: the
+    /// same lookup (the last face listed that runs the reverse edge), so the
+    /// same list. Returns `false` (`out` then meaningless) when the body
+    /// does not fit.
+    fn silhouette_small(&self, removed: &[bool], out: &mut Vec<(usize, usize, usize, usize)>) -> bool {
+        const NONE: u8 = u8::MAX;
+        if self.vertices.len() > 64 || self.faces.len() >= usize::from(NONE) || self.indices.len() >= usize::from(NONE) {
+            return false;
+        }
+        // Per vertex, the last directed edge leaving it; per directed edge
+        // `a → b`, `(b, face, the previous edge leaving a)`.
+        let mut head = [NONE; 64];
+        // (Zeros, so that the array is set by `memset`.)
+        let mut edges = [(0u8, 0u8, 0u8); 256];
+        let mut count = 0usize;
+        for (f, face) in self.faces.iter().enumerate() {
+            let loop_indices = &self.indices[face.start..face.end];
+            let Some(&first) = loop_indices.first() else { continue };
+            for (k, &a) in loop_indices.iter().enumerate() {
+                let b = loop_indices.get(k + 1).copied().unwrap_or(first);
+                if a >= 64 || b >= 64 {
+                    return false;
+                }
+                edges[count] = (b as u8, f as u8, head[a]);
+                head[a] = count as u8;
+                count += 1;
+            }
+        }
+        for (f, face) in self.faces.iter().enumerate() {
+            if !removed[f] {
+                continue;
+            }
+            let loop_indices = &self.indices[face.start..face.end];
+            let Some(&first) = loop_indices.first() else { continue };
+            for (k, &a) in loop_indices.iter().enumerate() {
+                let b = loop_indices.get(k + 1).copied().unwrap_or(first);
+                // The face of `b → a`.
+                let mut e = head[b];
+                while e != NONE {
+                    let (to, across, previous) = edges[usize::from(e)];
+                    if usize::from(to) == a {
+                        if !removed[usize::from(across)] {
+                            out.push((a, b, f, usize::from(across)));
+                        }
+                        break;
+                    }
+                    e = previous;
+                }
+            }
+        }
+        true
     }
 
     /// The plane of the face `(a, b, p)` of `conv(self ∪ {p})` along the
