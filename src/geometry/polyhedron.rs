@@ -691,8 +691,8 @@ impl ConvexPolyhedron {
     /// vertices, fewer than 255 faces and directed edges), with the edges
     /// chained by start vertex in stack arrays instead of [`HalfEdges`]: the
     /// same lookup (the last face listed that runs the reverse edge), so the
-    /// same list. Returns `false` (`out` then meaningless) when the body
-    /// does not fit.
+    /// same list, appended to `out`. Returns `false` (`out` then
+    /// meaningless) when the body does not fit.
     fn silhouette_small(&self, removed: &[bool], out: &mut Vec<(usize, usize, usize, usize)>) -> bool {
         const NONE: u8 = u8::MAX;
         if self.vertices.len() > 64 || self.faces.len() >= usize::from(NONE) || self.indices.len() >= usize::from(NONE) {
@@ -1191,6 +1191,54 @@ mod tests {
     /// the same face as a map of every directed edge filled in face order,
     /// for every vertex pair of random clipped bodies, on faces with a
     /// repeated edge (the last face wins) and out of range.
+    #[test]
+    fn small_silhouette_equals_the_half_edge_one() {
+        let mut random = crate::test_rng::unit(0x6a09_e667_f3bc_c908_u64);
+        let (mut half, mut workspace) = (HalfEdges::default(), ClipWorkspace::default());
+        let (mut small, mut reference) = (Vec::new(), Vec::new());
+        let mut check = |body: &ConvexPolyhedron, removed: &[bool]| {
+            small.clear();
+            assert!(body.silhouette_small(removed, &mut small));
+            half.build(body.vertices.len(), &body.faces, &body.indices);
+            reference.clear();
+            for (f, face) in body.faces().enumerate().filter(|&(f, _)| removed[f]) {
+                for (a, b) in face.edges() {
+                    match half.face(b, a) {
+                        Some(across) if !removed[across] => reference.push((a, b, f, across)),
+                        _ => {}
+                    }
+                }
+            }
+            assert_eq!(small, reference);
+            usize::from(!small.is_empty())
+        };
+        let mut silhouettes = 0;
+        for _ in 0..100 {
+            let mut body = unit_cube();
+            for _ in 0..8 {
+                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+                let Some(n) = n.try_normalize() else { continue };
+                let plane = Plane::from_point_normal(body.centroid() + n * (random() - 0.5) * 0.5, n);
+                let mut next = ConvexPolyhedron::empty();
+                body.clip_into(&plane, 1e-9, &mut next, &mut workspace);
+                if next.is_empty() {
+                    break;
+                }
+                body = next;
+                let removed: Vec<bool> = (0..body.face_count()).map(|_| random() < 0.4).collect();
+                silhouettes += check(&body, &removed);
+            }
+        }
+        assert!(silhouettes > 100, "{silhouettes}");
+        // A directed edge run by two faces: the later face is across.
+        let mut doubled = unit_cube();
+        let first = doubled.faces[0];
+        let start = doubled.indices.len();
+        doubled.indices.extend_from_within(first.start..first.end);
+        doubled.faces.push(FaceSpan { plane: first.plane, start, end: doubled.indices.len() });
+        check(&doubled, &[false, true, true, true, true, false, false]);
+    }
+
     #[test]
     fn half_edges_equal_the_edge_map() {
         let mut random = crate::test_rng::unit(0x9e37_79b9_7f4a_7c15_u64);
