@@ -469,6 +469,8 @@ impl ConvexPolyhedron {
     #[inline(never)]
     fn clip_small_on(&self, plane: &Plane, outside: u64, inside: u64, out: &mut Self) -> Option<bool> {
         let Self { vertices, faces, indices } = out;
+        let n = self.vertices.len();
+        let all_old = if n == SMALL { u64::MAX } else { (1u64 << n) - 1 };
         let mut new_index = [0u8; SMALL];
         // The new vertices on the plane: kept ones within eps of it, and
         // (below) every cut point.
@@ -487,6 +489,11 @@ impl ConvexPolyhedron {
         }
         let kept = vertices.len();
         let mut cut_keys = [0u16; SMALL];
+        // The input vertices in kept faces: every one not outside is
+        // pushed there, and the cap runs only through such vertices and
+        // cut points (which are all pushed), so a kept vertex is used in the
+        // result exactly when it is here.
+        let mut used = 0u64;
         for face in &self.faces {
             let loop_indices = &self.indices[face.start..face.end];
             if loop_indices.len() < 3 {
@@ -501,6 +508,7 @@ impl ConvexPolyhedron {
                 continue;
             }
             let start = indices.len();
+            used |= mask;
             if mask & outside == 0 {
                 indices.extend(loop_indices.iter().map(|&a| usize::from(new_index[a % SMALL])));
                 faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
@@ -547,6 +555,11 @@ impl ConvexPolyhedron {
         let mut along_len = 0;
         for face in faces.iter() {
             let loop_indices = &indices[face.start..face.end];
+            let on = loop_indices.iter().fold(0u64, |m, &a| m | 1u64 << a) & on_plane;
+            if on & on.wrapping_sub(1) == 0 {
+                // At most one vertex on the plane: no plane edge.
+                continue;
+            }
             for (k, &a) in loop_indices.iter().enumerate() {
                 let b = if k + 1 == loop_indices.len() { loop_indices[0] } else { loop_indices[k + 1] };
                 if on_plane & (1u64 << a) != 0 && on_plane & (1u64 << b) != 0 {
@@ -604,13 +617,7 @@ impl ConvexPolyhedron {
             out.clear();
             return Some(true);
         }
-        let mut used = 0u64;
-        for &i in indices.iter() {
-            used |= 1u64 << i;
-        }
-        let count = vertices.len();
-        let all = if count == SMALL { u64::MAX } else { (1u64 << count) - 1 };
-        if used != all {
+        if used & !outside != all_old & !outside {
             // A kept vertex in no kept face (possible only through the
             // tolerance): `finish_parts` renumbers.
             return None;
