@@ -432,16 +432,18 @@ impl ConvexPolyhedron {
         eps: f64,
         workspace: &mut ClipWorkspace,
     ) {
+        // The spare body is taken once for the chain (`clip_core` does not
+        // use it).
+        let mut next = std::mem::take(&mut workspace.spare);
         for plane in planes {
             if self.is_empty() {
                 break;
             }
-            let mut next = std::mem::take(&mut workspace.spare);
             if self.clip_core(plane, eps, &mut next, workspace) {
                 std::mem::swap(self, &mut next);
             }
-            workspace.spare = next;
         }
+        workspace.spare = next;
     }
 
     /// The intersection with the box `[min, max]`, padded like
