@@ -532,7 +532,8 @@ impl ConvexPolyhedron {
                             if vertices.len() == SMALL {
                                 return None;
                             }
-                            let (di, dj) = (plane.signed_distance(self.vertices[i]), plane.signed_distance(self.vertices[j]));
+                            let (di, dj) =
+                                (plane.signed_distance(self.vertices[i]), plane.signed_distance(self.vertices[j]));
                             let t = di / (di - dj);
                             vertices.push(self.vertices[i].lerp(self.vertices[j], t));
                             cut_keys[cut_count] = key;

@@ -697,7 +697,8 @@ impl ConvexPolyhedron {
     /// meaningless) when the body does not fit.
     fn silhouette_small(&self, removed: &[bool], out: &mut Vec<(usize, usize, usize, usize)>) -> bool {
         const NONE: u8 = u8::MAX;
-        if self.vertices.len() > 64 || self.faces.len() >= usize::from(NONE) || self.indices.len() >= usize::from(NONE) {
+        if self.vertices.len() > 64 || self.faces.len() >= usize::from(NONE) || self.indices.len() >= usize::from(NONE)
+        {
             return false;
         }
         // Per vertex, the last directed edge leaving it; per directed edge
