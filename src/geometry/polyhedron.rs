@@ -774,7 +774,16 @@ impl ConvexPolyhedron {
     fn supporting_plane(&self, normal: DVec3, anchor: DVec3, eps: f64) -> Option<(Plane, f64)> {
         let normal = normal.try_normalize()?;
         let mut plane = Plane { normal, offset: -normal.dot(anchor) };
-        let excess = self.vertices.iter().map(|&v| plane.signed_distance(v)).fold(0.0, f64::max);
+        // The largest distance from 0 by plain compares (`f64::max` checks
+        // for NaN each time; a NaN is passed over either way, and a zero's
+        // sign decides nothing below).
+        let mut excess = 0.0;
+        for &v in &self.vertices {
+            let d = plane.signed_distance(v);
+            if d > excess {
+                excess = d;
+            }
+        }
         if excess > eps {
             plane.offset -= excess;
             return Some((plane, excess));
