@@ -246,6 +246,10 @@ pub(crate) struct AxisFit<'a> {
     pub map: ShadowMapSize,
     pub fit: &'a AffineFitOptions,
     pub tolerances: &'a Tolerances,
+    /// The points are a convex cone's edges in order around it (the
+    /// optimizer's extreme rays): the fit takes their hull without a sort
+    /// ([`FitWorkspace::fit_polygon`]; the same fit either way).
+    pub polygon: bool,
 }
 
 /// The homography `G` (NDC units, unit `j`) for optical axis `axis` that fits
@@ -266,7 +270,12 @@ pub(crate) fn fit_homography(
         return None;
     }
     let (e1, e2) = project_to_image_plane(j, xs.iter().copied(), scratch).ok()?;
-    let fit = workspace.fit(scratch, setup.map.width, setup.map.height, setup.fit).ok()?;
+    let fit = if setup.polygon {
+        workspace.fit_polygon(scratch, setup.map.width, setup.map.height, setup.fit)
+    } else {
+        workspace.fit(scratch, setup.map.width, setup.map.height, setup.fit)
+    }
+    .ok()?;
     let homography = fit.ndc_from_plane * DMat3::from_cols(e1, e2, j).transpose();
     holds_all(&homography, xs, setup.tolerances.coverage_slack).then_some(homography)
 }
@@ -308,6 +317,43 @@ fn fold_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
         None => Some((v, v)),
         Some((lo, hi)) => Some((v.min(lo), v.max(hi))),
     })
+}
+
+/// [`fold_range`] of `value` over `a` then `b`, four values at a time: the
+/// lanes' smallest and largest by plain compares (`minpd`), which are
+/// `fold_range`'s bits whenever no value is NaN and neither end is a zero
+/// (the one value whose bits `f64::min` may pick either way, `±0`);
+/// otherwise `fold_range` itself.
+fn range_of(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
+    const LANES: usize = 4;
+    let mut lo = [f64::INFINITY; LANES];
+    let mut hi = [f64::NEG_INFINITY; LANES];
+    let mut nan = [false; LANES];
+    let mut fold = |v: f64, k: usize| {
+        lo[k] = if v < lo[k] { v } else { lo[k] };
+        hi[k] = if v > hi[k] { v } else { hi[k] };
+        nan[k] |= v.is_nan();
+    };
+    for points in [a, b] {
+        let mut chunks = points.chunks_exact(LANES);
+        for chunk in &mut chunks {
+            for (k, p) in chunk.iter().enumerate() {
+                fold(value(p), k);
+            }
+        }
+        for p in chunks.remainder() {
+            fold(value(p), 0);
+        }
+    }
+    let lo = lo.into_iter().fold(f64::INFINITY, |m, v| if v < m { v } else { m });
+    let hi = hi.into_iter().fold(f64::NEG_INFINITY, |m, v| if v > m { v } else { m });
+    if a.is_empty() && b.is_empty() {
+        None
+    } else if nan.contains(&true) || lo == 0.0 || hi == 0.0 {
+        fold_range(a.iter().chain(b).map(value))
+    } else {
+        Some((lo, hi))
+    }
 }
 
 /// The smallest range holding both ranges (either may be absent).
@@ -355,7 +401,7 @@ impl Placement<'_> {
             return Err(LixelError::UnusableSamples { reason: "no points to fit the map around" });
         }
         let homography = fit_homography(
-            &AxisFit { frame: &self.frame, map: self.map, fit: self.fit, tolerances: self.tolerances },
+            &AxisFit { frame: &self.frame, map: self.map, fit: self.fit, tolerances: self.tolerances, polygon: false },
             self.axis,
             xs,
             fit,
@@ -404,7 +450,6 @@ impl Placement<'_> {
         };
         let (x_row, y_row, w_row) = (g_row(0), g_row(1), g_row(2));
         let pad = self.tolerances.depth_pad;
-        let all_depth = || self.focus.iter().chain(self.depth_points);
         // The casters' range of the depth function: `w` or `d·x`.
         let depth_function = match self.frame {
             LightFrame::Perspective { .. } => w_row,
@@ -416,8 +461,13 @@ impl Placement<'_> {
         // except where a directional light's function grows towards the
         // light (then the casters' maximum is solved for).
         let depth_points = match self.frame {
-            LightFrame::Perspective { .. } => fold_range(all_depth().map(|&p| w_row.dot(p.extend(1.0)))),
-            LightFrame::Orthographic { rotation } => fold_range(all_depth().map(|p| rotation.row(2).dot(*p))),
+            LightFrame::Perspective { .. } => {
+                range_of(self.focus, self.depth_points, |p: &DVec3| w_row.dot(p.extend(1.0)))
+            }
+            LightFrame::Orthographic { rotation } => {
+                let d = rotation.row(2);
+                range_of(self.focus, self.depth_points, |p: &DVec3| d.dot(*p))
+            }
         };
         let hull_max = depth_points.and_then(|(_, top)| match (self.frame, self.light) {
             (LightFrame::Perspective { position, .. }, _) => Some(top.max(w_row.dot(position.extend(1.0)))),
@@ -458,7 +508,13 @@ impl Placement<'_> {
             }
         };
         let clip_from_world = DMat4::from_cols(x_row, y_row, z_row, w_row).transpose();
-        let points = fold_range(all_depth().map(|&p| light_distance(&self.frame, p)));
+        let points = match self.frame {
+            LightFrame::Perspective { .. } => {
+                range_of(self.focus, self.depth_points, |p: &DVec3| light_distance(&self.frame, *p))
+            }
+            // The same values as the depth function's (`light_distance`).
+            LightFrame::Orthographic { .. } => depth_points,
+        };
         // A directional light's distance is the depth function itself.
         let caster_distance = match (self.frame, self.casters, casters) {
             (LightFrame::Perspective { position, .. }, Some(c), Some((_, _, nearest))) => {
@@ -481,5 +537,60 @@ impl Placement<'_> {
             method: self.method,
             fallback: self.fallback,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `range_of` is `fold_range` bit for bit: on plain values (the lanes),
+    /// and with NaN, signed zeros at either end, infinities, short and
+    /// empty inputs (the fallback).
+    #[test]
+    fn range_of_is_fold_range() {
+        let mut unit = crate::test_rng::unit(0x0DDB_1A5E_5BAD_5EED_u64);
+        let mut next = move || unit() * 2.0 - 1.0;
+        let mut fallbacks = 0;
+        for case in 0..4000 {
+            let (na, nb) = (case % 13, (case / 13) % 11);
+            let mut point = || DVec3::new(next(), next(), next()) * 10.0;
+            let mut a: Vec<DVec3> = (0..na).map(|_| point()).collect();
+            let mut b: Vec<DVec3> = (0..nb).map(|_| point()).collect();
+            let all = a.len() + b.len();
+            if all > 0 {
+                let k = case % all;
+                let p = if k < a.len() { &mut a[k] } else { &mut b[k - a.len()] };
+                match case % 7 {
+                    1 => p.x = f64::NAN,
+                    4 => p.x = f64::INFINITY,
+                    _ => {}
+                }
+            }
+            if case % 7 == 2 && all >= 2 {
+                // The smallest value along `X` a zero, both signs present
+                // (`f64::min` may keep either).
+                for p in a.iter_mut().chain(&mut b) {
+                    *p = p.abs();
+                }
+                let (k0, k1) = (case % all, (case + 1) % all);
+                for (k, zero) in [(k0, DVec3::ZERO), (k1, DVec3::splat(-0.0))] {
+                    if k < a.len() {
+                        a[k] = zero;
+                    } else {
+                        b[k - a.len()] = zero;
+                    }
+                }
+            }
+            for d in [DVec3::X, DVec3::new(0.3, -0.5, 0.8)] {
+                let value = |p: &DVec3| d.dot(*p);
+                let fast = range_of(&a, &b, value);
+                let plain = fold_range(a.iter().chain(&b).map(value));
+                let bits = |r: Option<(f64, f64)>| r.map(|(lo, hi)| (lo.to_bits(), hi.to_bits()));
+                assert_eq!(bits(fast), bits(plain), "case {case}: {a:?} {b:?}");
+                fallbacks += usize::from(plain.is_some_and(|(lo, hi)| lo == 0.0 || hi == 0.0));
+            }
+        }
+        assert!(fallbacks > 100, "{fallbacks}");
     }
 }

@@ -3,7 +3,7 @@
 
 use glam::{DMat2, DMat3, DVec2};
 
-use super::hull::convex_hull_2d_into;
+use super::hull::{convex_hull_2d_into, convex_hull_of_polygon_into};
 use super::rect::{bounding_rect_along, min_area_rect, min_area_sheared, Parallelogram};
 
 /// Padding floor relative to the larger extent: a fit is never thinner than
@@ -131,6 +131,32 @@ impl FitWorkspace {
         map_height: u32,
         options: &AffineFitOptions,
     ) -> Result<AffineFit, FitError> {
+        self.fit_hull_of(points, map_width, map_height, options, false)
+    }
+
+    /// [`fit`](Self::fit) of points that are expected to be a strictly
+    /// convex polygon's vertices in order (an earlier hull's, projected
+    /// onto another plane): their hull is then taken without a sort, and
+    /// the fit is `fit`'s bit for bit whether they are or not (see
+    /// `hull::convex_hull_of_polygon_into`).
+    pub(crate) fn fit_polygon(
+        &mut self,
+        points: &[DVec2],
+        map_width: u32,
+        map_height: u32,
+        options: &AffineFitOptions,
+    ) -> Result<AffineFit, FitError> {
+        self.fit_hull_of(points, map_width, map_height, options, true)
+    }
+
+    fn fit_hull_of(
+        &mut self,
+        points: &[DVec2],
+        map_width: u32,
+        map_height: u32,
+        options: &AffineFitOptions,
+        polygon: bool,
+    ) -> Result<AffineFit, FitError> {
         self.hull.clear();
         if map_width == 0 || map_height == 0 {
             return Err(FitError::ZeroMapSize);
@@ -142,7 +168,11 @@ impl FitWorkspace {
             return Err(FitError::NonFinite { index });
         }
 
-        convex_hull_2d_into(points, &mut self.sorted, &mut self.hull);
+        if polygon {
+            convex_hull_of_polygon_into(points, &mut self.sorted, &mut self.hull);
+        } else {
+            convex_hull_2d_into(points, &mut self.sorted, &mut self.hull);
+        }
         let hull = self.hull.as_slice();
         let magnitude = hull.iter().fold(0.0, |max: f64, p| max.max(p.abs().max_element()));
         let rect = min_area_rect(hull).ok_or(FitError::NoPoints)?;

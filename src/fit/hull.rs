@@ -248,6 +248,127 @@ pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mu
     chain(scratch, hull);
 }
 
+/// [`convex_hull_2d_into`] of points expected to be the vertices of a
+/// strictly convex polygon in order (either orientation, any first vertex),
+/// such as the vertices of an earlier hull seen through a projective map
+/// that keeps them all on one side of its vanishing line: when they are,
+/// writes them counter-clockwise from the lexicographically smallest, with
+/// no sort; when they only rise once and fall once in lexicographic order
+/// (rounding made a few nearly collinear vertices turn the wrong way),
+/// merges the two runs into the sorted order and runs the monotone chain
+/// on it, again with no sort; otherwise runs [`convex_hull_2d_into`]. The
+/// same hull, bit for bit, in every case.
+///
+/// The check is exact: every consecutive triple turns strictly the same
+/// way (the chain's exact `orient`), and the points rise strictly in
+/// lexicographic order from the smallest to the largest and fall back,
+/// once around. A closed polygon whose turns are all strictly left winds
+/// around as many times as its `x` (then `y`) rises and falls, so once
+/// means a strictly convex polygon: all its vertices, and nothing else, are
+/// the hull's, which the monotone chain lists counter-clockwise from the
+/// smallest (its lower chain is the rising run, its upper one the falling
+/// run). Collinear vertices take the merged runs; non-finite points and
+/// neighbours or two points that compare equal take the general path.
+pub(crate) fn convex_hull_of_polygon_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
+    let Some((first, turns)) = polygon_order(points) else {
+        convex_hull_2d_into(points, scratch, hull);
+        return;
+    };
+    hull.clear();
+    match turns {
+        Some(true) => {
+            hull.extend_from_slice(&points[first..]);
+            hull.extend_from_slice(&points[..first]);
+        }
+        Some(false) => {
+            hull.extend(points[..=first].iter().rev());
+            hull.extend(points[first + 1..].iter().rev());
+        }
+        None => {
+            // Not strictly convex, but rising once and falling once: the
+            // two runs merged are the sorted order (no two points compare
+            // equal), so the chain needs no sort.
+            if merge_runs(points, first, scratch) {
+                chain(scratch, hull);
+            } else {
+                convex_hull_2d_into(points, scratch, hull);
+            }
+        }
+    }
+}
+
+/// When `points` (at least three, finite, no two neighbours equal) rise
+/// strictly in lexicographic order from their smallest point to their
+/// largest and fall back, once around: the index of the smallest, and
+/// `Some(counter_clockwise)` when every consecutive triple also turns
+/// strictly the same way (a strictly convex polygon, see
+/// [`convex_hull_of_polygon_into`]), else `None`.
+fn polygon_order(points: &[DVec2]) -> Option<(usize, Option<bool>)> {
+    let n = points.len();
+    if n < 3 || !points.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let (mut a, mut b) = (points[n - 1], points[0]);
+    let left = orient(a, b, points[1]) > 0.0;
+    let mut convex = true;
+    let mut first = None;
+    let mut before = lexicographic(&a, &b);
+    for i in 0..n {
+        let c = points[if i + 1 == n { 0 } else { i + 1 }];
+        let after = lexicographic(&b, &c);
+        // The one vertex where the falling run turns into the rising one
+        // is the smallest.
+        match (before, after) {
+            (Ordering::Equal, _) | (_, Ordering::Equal) => return None,
+            (Ordering::Greater, Ordering::Less) if first.is_none() => first = Some(i),
+            (Ordering::Greater, Ordering::Less) => return None,
+            _ => {}
+        }
+        if convex {
+            let turn = orient(a, b, c);
+            convex = if left { turn > 0.0 } else { turn < 0.0 };
+        }
+        (a, b, before) = (b, c, after);
+    }
+    Some((first?, convex.then_some(left)))
+}
+
+/// Writes to `sorted` the points in lexicographic order by merging the run
+/// rising from `first` with the falling one read backwards; `false` when
+/// two points compare equal (their order after a sort is unspecified).
+fn merge_runs(points: &[DVec2], first: usize, sorted: &mut Vec<DVec2>) -> bool {
+    let n = points.len();
+    let at = |k: usize| points[(first + k) % n];
+    // Rising: at(0), at(1), …, at(last); falling read backwards: at(n − 1), …, at(last + 1).
+    let mut last = 0;
+    while last + 1 < n && lexicographic(&at(last), &at(last + 1)) == Ordering::Less {
+        last += 1;
+    }
+    sorted.clear();
+    let (mut i, mut j) = (0, n);
+    while i <= last || j > last + 1 {
+        let take_rising = if i > last {
+            false
+        } else if j == last + 1 {
+            true
+        } else {
+            match lexicographic(&at(i), &at(j - 1)) {
+                Ordering::Less => true,
+                Ordering::Greater => false,
+                Ordering::Equal => return false,
+            }
+        };
+        if take_rising {
+            sorted.push(at(i));
+            i += 1;
+        } else {
+            sorted.push(at(j - 1));
+            j -= 1;
+        }
+    }
+    true
+}
+
 /// Andrew's monotone chain over points sorted lexicographically and deduplicated.
 fn chain(scratch: &[DVec2], hull: &mut Vec<DVec2>) {
     hull.clear();
@@ -352,6 +473,63 @@ mod tests {
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
+    }
+
+    /// Points in polygon order give `convex_hull_2d`'s hull bit for bit:
+    /// convex polygons in either orientation from any vertex (the path
+    /// without a sort), with collinear, near-collinear or dented vertices
+    /// (the merged runs), and orders that wind twice, repeat a point or are
+    /// not finite (the general path).
+    #[test]
+    fn polygon_order_gives_the_hull() {
+        let mut next = crate::test_rng::unit(0x5851_F42D_4C95_7F2D_u64);
+        let mut paths = [0; 3];
+        for case in 0..3000 {
+            let n = 3 + case % 40;
+            let mut angles: Vec<f64> = (0..n).map(|_| next() * std::f64::consts::TAU).collect();
+            angles.sort_by(f64::total_cmp);
+            let (cx, cy, r) = (next() * 10.0 - 5.0, next() * 10.0 - 5.0, 0.1 + next() * 1e3);
+            let mut points: Vec<DVec2> = angles.iter().map(|a| v(cx + r * a.cos(), cy + r * a.sin())).collect();
+            match case % 9 {
+                // A midpoint of an edge (collinear, or a rounding off it).
+                1 if n > 3 => {
+                    let m = (points[1] + points[2]) * 0.5;
+                    points.insert(2, m);
+                }
+                // A vertex pulled inside (a dent).
+                2 => points[n / 2] = v(cx, cy) + (points[n / 2] - v(cx, cy)) * 0.5,
+                // Twice around.
+                3 => points = points.iter().chain(points.iter()).map(|p| *p + v(next() * 1e-3, 0.0)).collect(),
+                // A repeated point.
+                4 => points.push(points[0]),
+                // Not finite.
+                5 => points[n / 3] = v(f64::NAN, 0.0),
+                // A pixel-grid line: exactly collinear runs.
+                6 => {
+                    points = (0..n).map(|k| v(k as f64, 0.0)).chain((1..n).map(|k| v((n - k) as f64, 1.0))).collect();
+                }
+                _ => {}
+            }
+            if case % 2 == 1 {
+                points.reverse();
+            }
+            let start = case % points.len();
+            points.rotate_left(start);
+            let expected = convex_hull_2d(&points);
+            let (mut scratch, mut hull) = (Vec::new(), vec![v(7.0, 7.0)]);
+            convex_hull_of_polygon_into(&points, &mut scratch, &mut hull);
+            assert_eq!(hull.len(), expected.len(), "case {case}");
+            for (a, b) in hull.iter().zip(&expected) {
+                assert_eq!((a.x.to_bits(), a.y.to_bits()), (b.x.to_bits(), b.y.to_bits()), "case {case}");
+            }
+            paths[match polygon_order(&points) {
+                Some((_, Some(_))) => 0,
+                Some((_, None)) => 1,
+                None => 2,
+            }] += 1;
+        }
+        // Every path is taken often.
+        assert!(paths.iter().all(|&count| count > 200), "{paths:?}");
     }
 
     #[test]

@@ -99,6 +99,11 @@ impl ConvexPolyhedron {
         let reference = workspace.reference_boundary;
         #[cfg(not(test))]
         let reference = false;
+        if !reference {
+            if let Some(changed) = self.clip_small(plane, eps, out) {
+                return changed;
+            }
+        }
         let ClipWorkspace { dist, side, new_index, cuts, on_plane, edges, walker, .. } = workspace;
         dist.clear();
         dist.extend(self.vertices.iter().map(|&v| plane.signed_distance(v)));
@@ -273,6 +278,352 @@ impl ConvexPolyhedron {
             out.finish_parts(new_index);
         }
         true
+    }
+}
+
+/// The most vertices (and cut points) [`ConvexPolyhedron::clip_small`]
+/// handles: one bit each in a `u64`.
+const SMALL: usize = 64;
+
+impl ConvexPolyhedron {
+    /// [`clip_core`](Self::clip_core)'s simple road for a body of at most
+    /// [`SMALL`] vertices, without its scratch buffers: the sides as bit
+    /// masks, the new indices, cut edges and cap links in small arrays, the
+    /// distances recomputed for the few crossed edges (the same expression,
+    /// so the same bits). Makes exactly what `clip_core` makes, in the same
+    /// order, or returns `None` (having perhaps written into `out`) where
+    /// that needs its general road: a vertex within `eps` of the plane (or a
+    /// NaN distance), more than [`SMALL`] vertices or cut points, a face
+    /// too short, or a cap boundary that is not one simple cycle of three
+    /// or more edges. `eps` is non-negative and the body is not empty.
+    fn clip_small(&self, plane: &Plane, eps: f64, out: &mut Self) -> Option<bool> {
+        let n = self.vertices.len();
+        if n > SMALL {
+            return None;
+        }
+        let (mut outside, mut inside) = (0u64, 0u64);
+        for (i, &v) in self.vertices.iter().enumerate() {
+            let d = plane.signed_distance(v);
+            outside |= u64::from(d > eps) << i;
+            inside |= u64::from(d < -eps) << i;
+        }
+        if outside == 0 {
+            return Some(false);
+        }
+        out.clear();
+        if inside == 0 {
+            return Some(true);
+        }
+        let all = if n == SMALL { u64::MAX } else { (1u64 << n) - 1 };
+        if (outside | inside) != all {
+            // A vertex on the plane (or a NaN distance).
+            return self.clip_small_on(plane, outside, inside, out);
+        }
+        let Self { vertices, faces, indices } = out;
+        let mut new_index = [0u8; SMALL];
+        for (i, &v) in self.vertices.iter().enumerate() {
+            if inside & (1u64 << i) != 0 {
+                new_index[i] = vertices.len() as u8;
+                vertices.push(v);
+            }
+        }
+        let kept = vertices.len();
+        // Cut `c` (vertex `kept + c`) lies on the edge `cut_keys[c]`
+        // (sorted pair packed); `link[c]` is the cap boundary's next cut
+        // after it (`u8::MAX`: none yet).
+        let mut cut_keys = [0u16; SMALL];
+        let mut link = [u8::MAX; SMALL];
+        let mut cut_count = 0usize;
+        // The cap boundary: its edge count and first vertex.
+        let mut boundary_len = 0usize;
+        let mut boundary_start = usize::MAX;
+        for face in &self.faces {
+            let loop_indices = &self.indices[face.start..face.end];
+            if loop_indices.len() < 3 {
+                return None;
+            }
+            let mut mask = 0u64;
+            for &a in loop_indices {
+                mask |= 1u64 << (a % SMALL);
+            }
+            if mask & outside == 0 {
+                let start = indices.len();
+                indices.extend(loop_indices.iter().map(|&a| usize::from(new_index[a % SMALL])));
+                faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+                continue;
+            }
+            if mask & inside == 0 {
+                continue;
+            }
+            let start = indices.len();
+            // The last cut pushed, if it is the last index pushed.
+            let mut last_cut = usize::MAX;
+            let is_out = |a: usize| outside & (1u64 << (a % SMALL)) != 0;
+            // One edge `a → b` of the loop: the kept start, then the cut.
+            macro_rules! edge {
+                ($a:expr, $a_out:expr, $b:expr, $b_out:expr) => {{
+                    let (a, a_out, b, b_out) = ($a, $a_out, $b, $b_out);
+                    if !a_out {
+                        indices.push(usize::from(new_index[a % SMALL]));
+                        last_cut = usize::MAX;
+                    }
+                    if a_out != b_out {
+                        let (i, j) = (a.min(b), a.max(b));
+                        let key = ((i as u16) << 8) | j as u16;
+                        let cut = match cut_keys[..cut_count].iter().position(|&k| k == key) {
+                            Some(c) => c,
+                            None => {
+                                if cut_count == SMALL {
+                                    return None;
+                                }
+                                let (di, dj) =
+                                    (plane.signed_distance(self.vertices[i]), plane.signed_distance(self.vertices[j]));
+                                let t = di / (di - dj);
+                                vertices.push(self.vertices[i].lerp(self.vertices[j], t));
+                                cut_keys[cut_count] = key;
+                                cut_count += 1;
+                                cut_count - 1
+                            }
+                        };
+                        if last_cut != usize::MAX {
+                            // The plane edge `last_cut → cut`, reversed on the cap.
+                            if link[cut] != u8::MAX {
+                                return None;
+                            }
+                            link[cut] = last_cut as u8;
+                            if boundary_len == 0 {
+                                boundary_start = cut;
+                            }
+                            boundary_len += 1;
+                        }
+                        indices.push(kept + cut);
+                        last_cut = cut;
+                    }
+                }};
+            }
+            let first = loop_indices[0];
+            let first_out = is_out(first);
+            for pair in loop_indices.windows(2) {
+                edge!(pair[0], is_out(pair[0]), pair[1], is_out(pair[1]));
+            }
+            let last = loop_indices[loop_indices.len() - 1];
+            edge!(last, is_out(last), first, first_out);
+            // The closing edge, from the last cut to the first index when
+            // that is a cut too.
+            if last_cut != usize::MAX && indices[start] >= kept {
+                let cut = indices[start] - kept;
+                if link[cut] != u8::MAX {
+                    return None;
+                }
+                link[cut] = last_cut as u8;
+                if boundary_len == 0 {
+                    boundary_start = cut;
+                }
+                boundary_len += 1;
+            }
+            faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+        }
+        if boundary_len < 3 {
+            return None;
+        }
+        // The cap: one simple cycle through `boundary_len` cut points.
+        let start = indices.len();
+        let mut c = boundary_start;
+        loop {
+            indices.push(kept + c);
+            let next = link[c];
+            if next == u8::MAX {
+                return None;
+            }
+            if usize::from(next) == boundary_start {
+                break;
+            }
+            if indices.len() - start == boundary_len {
+                return None;
+            }
+            c = usize::from(next);
+        }
+        if indices.len() - start != boundary_len {
+            return None;
+        }
+        faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
+        if faces.len() < 4 || !vertices[kept..].iter().all(|v| v.is_finite()) {
+            out.clear();
+        }
+        Some(true)
+    }
+}
+
+impl ConvexPolyhedron {
+    /// [`clip_small`](Self::clip_small) where some vertices lie within `eps`
+    /// of the plane (neither in `outside` nor in `inside`): `clip_core`'s
+    /// general road, for at most [`SMALL`] new vertices, with the same
+    /// steps in the same order. The faces are cut as there (an edge is cut
+    /// only between strictly inside and strictly outside), the cap's
+    /// boundary is the plane edges (both ends on the plane) whose reverse
+    /// is not among them, reversed, in the faces' order, traced as
+    /// `LoopWalker::trace_simple` does. `None` (with `out` perhaps written)
+    /// where `clip_core` would walk a boundary that is not one simple cycle
+    /// or renumber (a kept vertex left in no face), or the body or its
+    /// pieces do not fit, or a distance is NaN.
+    #[inline(never)]
+    fn clip_small_on(&self, plane: &Plane, outside: u64, inside: u64, out: &mut Self) -> Option<bool> {
+        let Self { vertices, faces, indices } = out;
+        let n = self.vertices.len();
+        let all_old = if n == SMALL { u64::MAX } else { (1u64 << n) - 1 };
+        let mut new_index = [0u8; SMALL];
+        // The new vertices on the plane: kept ones within eps of it, and
+        // (below) every cut point.
+        let mut on_plane = 0u64;
+        for (i, &v) in self.vertices.iter().enumerate() {
+            if outside & (1u64 << i) == 0 {
+                if inside & (1u64 << i) == 0 {
+                    if plane.signed_distance(v).is_nan() {
+                        return None;
+                    }
+                    on_plane |= 1u64 << vertices.len();
+                }
+                new_index[i] = vertices.len() as u8;
+                vertices.push(v);
+            }
+        }
+        let kept = vertices.len();
+        let mut cut_keys = [0u16; SMALL];
+        // The input vertices in kept faces: every one not outside is
+        // pushed there, and the cap runs only through such vertices and
+        // cut points (which are all pushed), so a kept vertex is used in the
+        // result exactly when it is here.
+        let mut used = 0u64;
+        for face in &self.faces {
+            let loop_indices = &self.indices[face.start..face.end];
+            if loop_indices.len() < 3 {
+                return None;
+            }
+            let mut mask = 0u64;
+            for &a in loop_indices {
+                mask |= 1u64 << (a % SMALL);
+            }
+            if mask & inside == 0 {
+                // Nothing strictly inside: in the cap (to within eps).
+                continue;
+            }
+            let start = indices.len();
+            used |= mask;
+            if mask & outside == 0 {
+                indices.extend(loop_indices.iter().map(|&a| usize::from(new_index[a % SMALL])));
+                faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+                continue;
+            }
+            let is_out = |a: usize| outside & (1u64 << (a % SMALL)) != 0;
+            let is_in = |a: usize| inside & (1u64 << (a % SMALL)) != 0;
+            let first = loop_indices[0];
+            for (k, &a) in loop_indices.iter().enumerate() {
+                let b = if k + 1 == loop_indices.len() { first } else { loop_indices[k + 1] };
+                if !is_out(a) {
+                    indices.push(usize::from(new_index[a % SMALL]));
+                }
+                if (is_out(a) && is_in(b)) || (is_in(a) && is_out(b)) {
+                    let (i, j) = (a.min(b), a.max(b));
+                    let key = ((i as u16) << 8) | j as u16;
+                    let cut_count = vertices.len() - kept;
+                    let cut = match cut_keys[..cut_count].iter().position(|&k| k == key) {
+                        Some(c) => kept + c,
+                        None => {
+                            if vertices.len() == SMALL {
+                                return None;
+                            }
+                            let (di, dj) =
+                                (plane.signed_distance(self.vertices[i]), plane.signed_distance(self.vertices[j]));
+                            let t = di / (di - dj);
+                            vertices.push(self.vertices[i].lerp(self.vertices[j], t));
+                            cut_keys[cut_count] = key;
+                            on_plane |= 1u64 << (vertices.len() - 1);
+                            vertices.len() - 1
+                        }
+                    };
+                    indices.push(cut);
+                }
+            }
+            if indices.len() - start < 3 {
+                return None;
+            }
+            faces.push(FaceSpan { plane: face.plane, start, end: indices.len() });
+        }
+        // The plane edges, in the faces' order, then those without their
+        // reverse, reversed: the cap's boundary, each vertex's one edge out
+        // in `link` (a second one: not one simple cycle).
+        let mut along = [(0u8, 0u8); 2 * SMALL];
+        let mut along_len = 0;
+        for face in faces.iter() {
+            let loop_indices = &indices[face.start..face.end];
+            let on = loop_indices.iter().fold(0u64, |m, &a| m | 1u64 << a) & on_plane;
+            if on & on.wrapping_sub(1) == 0 {
+                // At most one vertex on the plane: no plane edge.
+                continue;
+            }
+            for (k, &a) in loop_indices.iter().enumerate() {
+                let b = if k + 1 == loop_indices.len() { loop_indices[0] } else { loop_indices[k + 1] };
+                if on_plane & (1u64 << a) != 0 && on_plane & (1u64 << b) != 0 {
+                    if along_len == along.len() {
+                        return None;
+                    }
+                    along[along_len] = (a as u8, b as u8);
+                    along_len += 1;
+                }
+            }
+        }
+        let along = &along[..along_len];
+        let mut link = [u8::MAX; SMALL];
+        let mut boundary_len = 0usize;
+        let mut boundary_start = usize::MAX;
+        for &(a, b) in along {
+            if along.iter().any(|&(c, d)| c == b && d == a) {
+                continue;
+            }
+            // The boundary edge `b → a`.
+            if link[usize::from(b)] != u8::MAX {
+                return None;
+            }
+            link[usize::from(b)] = a;
+            if boundary_len == 0 {
+                boundary_start = usize::from(b);
+            }
+            boundary_len += 1;
+        }
+        if boundary_len > 0 {
+            let start = indices.len();
+            let mut v = boundary_start;
+            loop {
+                indices.push(v);
+                let next = link[v];
+                if next == u8::MAX {
+                    return None;
+                }
+                if usize::from(next) == boundary_start {
+                    break;
+                }
+                if indices.len() - start == boundary_len {
+                    return None;
+                }
+                v = usize::from(next);
+            }
+            if indices.len() - start != boundary_len {
+                return None;
+            }
+            faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
+        }
+        // `finish_parts`: at least four faces, finite cut points (the kept
+        // vertices are), every vertex used.
+        if faces.len() < 4 || !vertices[kept..].iter().all(|v| v.is_finite()) {
+            out.clear();
+            return Some(true);
+        }
+        if used & !outside != all_old & !outside {
+            // A kept vertex in no kept face (possible only through the
+            // tolerance): `finish_parts` renumbers.
+            return None;
+        }
+        Some(true)
     }
 }
 

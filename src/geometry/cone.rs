@@ -88,7 +88,16 @@ pub(crate) fn min_enclosing_cone_in(dirs: &[DVec3], units: &mut Vec<DVec3>) -> O
         }
     }
 
-    let cos_half_angle = units.iter().map(|&u| cap.axis.dot(u)).fold(f64::INFINITY, f64::min);
+    // The least cosine by plain compares (`f64::min` checks for NaN each
+    // time; a NaN is passed over either way, and a zero fails the bound
+    // whatever its sign).
+    let mut cos_half_angle = f64::INFINITY;
+    for &u in units.iter() {
+        let c = cap.axis.dot(u);
+        if c < cos_half_angle {
+            cos_half_angle = c;
+        }
+    }
     (cos_half_angle > 1e-12).then_some(Cone { axis: cap.axis, cos_half_angle })
 }
 

@@ -432,16 +432,18 @@ impl ConvexPolyhedron {
         eps: f64,
         workspace: &mut ClipWorkspace,
     ) {
+        // The spare body is taken once for the chain (`clip_core` does not
+        // use it).
+        let mut next = std::mem::take(&mut workspace.spare);
         for plane in planes {
             if self.is_empty() {
                 break;
             }
-            let mut next = std::mem::take(&mut workspace.spare);
             if self.clip_core(plane, eps, &mut next, workspace) {
                 std::mem::swap(self, &mut next);
             }
-            workspace.spare = next;
         }
+        workspace.spare = next;
     }
 
     /// The intersection with the box `[min, max]`, padded like
@@ -671,8 +673,12 @@ impl ConvexPolyhedron {
     /// `(a, b, removed face, other face)`, into `out`; `edge_faces` is
     /// scratch.
     fn silhouette(&self, removed: &[bool], edge_faces: &mut HalfEdges, out: &mut Vec<(usize, usize, usize, usize)>) {
-        edge_faces.build(self.vertices.len(), &self.faces, &self.indices);
         out.clear();
+        if self.silhouette_small(removed, out) {
+            return;
+        }
+        out.clear();
+        edge_faces.build(self.vertices.len(), &self.faces, &self.indices);
         for (f, face) in self.faces().enumerate().filter(|&(f, _)| removed[f]) {
             for (a, b) in face.edges() {
                 match edge_faces.face(b, a) {
@@ -681,6 +687,62 @@ impl ConvexPolyhedron {
                 }
             }
         }
+    }
+
+    /// [`silhouette`](Self::silhouette) for a small body (at most 64
+    /// vertices, fewer than 255 faces and directed edges), with the edges
+    /// chained by start vertex in stack arrays instead of [`HalfEdges`]: the
+    /// same lookup (the last face listed that runs the reverse edge), so the
+    /// same list, appended to `out`. Returns `false` (`out` then
+    /// meaningless) when the body does not fit.
+    fn silhouette_small(&self, removed: &[bool], out: &mut Vec<(usize, usize, usize, usize)>) -> bool {
+        const NONE: u8 = u8::MAX;
+        if self.vertices.len() > 64 || self.faces.len() >= usize::from(NONE) || self.indices.len() >= usize::from(NONE)
+        {
+            return false;
+        }
+        // Per vertex, the last directed edge leaving it; per directed edge
+        // `a → b`, `(b, face, the previous edge leaving a)`.
+        let mut head = [NONE; 64];
+        // (Zeros, so that the array is set by `memset`.)
+        let mut edges = [(0u8, 0u8, 0u8); 256];
+        let mut count = 0usize;
+        for (f, face) in self.faces.iter().enumerate() {
+            let loop_indices = &self.indices[face.start..face.end];
+            let Some(&first) = loop_indices.first() else { continue };
+            for (k, &a) in loop_indices.iter().enumerate() {
+                let b = loop_indices.get(k + 1).copied().unwrap_or(first);
+                if a >= 64 || b >= 64 {
+                    return false;
+                }
+                edges[count] = (b as u8, f as u8, head[a]);
+                head[a] = count as u8;
+                count += 1;
+            }
+        }
+        for (f, face) in self.faces.iter().enumerate() {
+            if !removed[f] {
+                continue;
+            }
+            let loop_indices = &self.indices[face.start..face.end];
+            let Some(&first) = loop_indices.first() else { continue };
+            for (k, &a) in loop_indices.iter().enumerate() {
+                let b = loop_indices.get(k + 1).copied().unwrap_or(first);
+                // The face of `b → a`.
+                let mut e = head[b];
+                while e != NONE {
+                    let (to, across, previous) = edges[usize::from(e)];
+                    if usize::from(to) == a {
+                        if !removed[usize::from(across)] {
+                            out.push((a, b, f, usize::from(across)));
+                        }
+                        break;
+                    }
+                    e = previous;
+                }
+            }
+        }
+        true
     }
 
     /// The plane of the face `(a, b, p)` of `conv(self ∪ {p})` along the
@@ -712,7 +774,16 @@ impl ConvexPolyhedron {
     fn supporting_plane(&self, normal: DVec3, anchor: DVec3, eps: f64) -> Option<(Plane, f64)> {
         let normal = normal.try_normalize()?;
         let mut plane = Plane { normal, offset: -normal.dot(anchor) };
-        let excess = self.vertices.iter().map(|&v| plane.signed_distance(v)).fold(0.0, f64::max);
+        // The largest distance from 0 by plain compares (`f64::max` checks
+        // for NaN each time; a NaN is passed over either way, and a zero's
+        // sign decides nothing below).
+        let mut excess = 0.0;
+        for &v in &self.vertices {
+            let d = plane.signed_distance(v);
+            if d > excess {
+                excess = d;
+            }
+        }
         if excess > eps {
             plane.offset -= excess;
             return Some((plane, excess));
@@ -1132,6 +1203,54 @@ mod tests {
     /// the same face as a map of every directed edge filled in face order,
     /// for every vertex pair of random clipped bodies, on faces with a
     /// repeated edge (the last face wins) and out of range.
+    #[test]
+    fn small_silhouette_equals_the_half_edge_one() {
+        let mut random = crate::test_rng::unit(0x6a09_e667_f3bc_c908_u64);
+        let (mut half, mut workspace) = (HalfEdges::default(), ClipWorkspace::default());
+        let (mut small, mut reference) = (Vec::new(), Vec::new());
+        let mut check = |body: &ConvexPolyhedron, removed: &[bool]| {
+            small.clear();
+            assert!(body.silhouette_small(removed, &mut small));
+            half.build(body.vertices.len(), &body.faces, &body.indices);
+            reference.clear();
+            for (f, face) in body.faces().enumerate().filter(|&(f, _)| removed[f]) {
+                for (a, b) in face.edges() {
+                    match half.face(b, a) {
+                        Some(across) if !removed[across] => reference.push((a, b, f, across)),
+                        _ => {}
+                    }
+                }
+            }
+            assert_eq!(small, reference);
+            usize::from(!small.is_empty())
+        };
+        let mut silhouettes = 0;
+        for _ in 0..100 {
+            let mut body = unit_cube();
+            for _ in 0..8 {
+                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+                let Some(n) = n.try_normalize() else { continue };
+                let plane = Plane::from_point_normal(body.centroid() + n * (random() - 0.5) * 0.5, n);
+                let mut next = ConvexPolyhedron::empty();
+                body.clip_into(&plane, 1e-9, &mut next, &mut workspace);
+                if next.is_empty() {
+                    break;
+                }
+                body = next;
+                let removed: Vec<bool> = (0..body.face_count()).map(|_| random() < 0.4).collect();
+                silhouettes += check(&body, &removed);
+            }
+        }
+        assert!(silhouettes > 100, "{silhouettes}");
+        // A directed edge run by two faces: the later face is across.
+        let mut doubled = unit_cube();
+        let first = doubled.faces[0];
+        let start = doubled.indices.len();
+        doubled.indices.extend_from_within(first.start..first.end);
+        doubled.faces.push(FaceSpan { plane: first.plane, start, end: doubled.indices.len() });
+        check(&doubled, &[false, true, true, true, true, false, false]);
+    }
+
     #[test]
     fn half_edges_equal_the_edge_map() {
         let mut random = crate::test_rng::unit(0x9e37_79b9_7f4a_7c15_u64);

@@ -122,10 +122,32 @@ fn solve_on(
     // Never closer to the vanishing line than the matrix builder accepts.
     let front = 2.0 * problem.tolerances().min_front_cosine;
     let acceptable = |axis: DVec3| {
-        let floor_w = plane_dirs.iter().map(|u| axis.dot(*u)).fold(f64::INFINITY, f64::min);
-        let max_w = focus_dirs.iter().map(|u| axis.dot(*u)).fold(0.0, f64::max);
+        // The least and the largest `w` by plain compares: a NaN is passed
+        // over as `f64::min` and `f64::max` pass it over, and the sign of a
+        // zero does not matter below (a zero `floor_w` fails, a zero
+        // `max_w` bounds nothing).
+        let mut floor_w = f64::INFINITY;
+        for u in &plane_dirs {
+            let w = axis.dot(*u);
+            if w < floor_w {
+                floor_w = w;
+            }
+        }
+        // With the relevant points' least `w`: all are at least `least`
+        // exactly when it is and none is NaN.
+        let (mut max_w, mut min_w, mut nan) = (0.0, f64::INFINITY, false);
+        for u in &focus_dirs {
+            let w = axis.dot(*u);
+            if w > max_w {
+                max_w = w;
+            }
+            if w < min_w {
+                min_w = w;
+            }
+            nan |= w.is_nan();
+        }
         let least = (beta * floor_w).max(front * max_w);
-        floor_w > 0.0 && focus_dirs.iter().all(|u| axis.dot(*u) >= least)
+        floor_w > 0.0 && (focus_dirs.is_empty() || (!nan && min_w >= least))
     };
     let blended = |t: f64| plane_axis * (1.0 - t) + focused_axis * t;
     let (axis, fallback) = if acceptable(plane_axis) {

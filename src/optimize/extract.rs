@@ -382,8 +382,10 @@ impl Classes {
             return;
         }
         self.one = false;
+        // `fill_classes` writes every cell: a buffer of the right size is
+        // reused as it is (zeroing half a megabyte at 180x180 first cost
+        // more than the rest of the class fill).
         for buffer in [&mut self.class64, &mut self.hor64] {
-            buffer.clear();
             buffer.resize(w * h, 0);
         }
         // In bands of `band_rows` rows (in parallel with rayon): a row's
@@ -530,8 +532,9 @@ pub(super) fn extract(
                     let x = 64 * k + j as usize;
                     let (sx, column) = columns[x];
                     let (s, b) = ((shadow >> j) as u32 & 1, (mixed >> j) as u32 & 1);
-                    let point = work.point_at((x, y), (sx, sy), row, column, b != 0);
-                    work.emit(all, 0, &point, s, b);
+                    let mut surface = None;
+                    let point = work.point_at((x, y), (sx, sy), row, column, b != 0, |found| surface = found);
+                    work.emit(all, 0, point, surface.as_ref(), s, b);
                 }
             }
         }
@@ -549,8 +552,20 @@ pub(super) fn extract(
     bands.resize_with(h.div_ceil(band_rows), Band::default);
     let collect = |(b, band): (usize, &mut Band)| {
         band.active.clear();
+        band.surfaces.clear();
         band.covered = 0;
-        for y in b * band_rows..((b + 1) * band_rows).min(h) {
+        let rows = b * band_rows..((b + 1) * band_rows).min(h);
+        if band.active.capacity() == 0 {
+            // A fresh workspace (every `from_readback_all`): a first guess
+            // at the band's active pixels, an eighth of its pixels, so that
+            // the lists do not start at a few entries and get copied a
+            // dozen times as they grow (counting them exactly first cost
+            // as much as the copies). A reused workspace has grown to fit.
+            let pixels = rows.len() * w;
+            band.active.reserve(pixels / 8);
+            band.surfaces.reserve(pixels / 32);
+        }
+        for y in rows {
             let sy = grid.origin.y + (y as f64 + 0.5) * step.y;
             let row = m.y_axis * sy;
             let (class, near) = classes.row(y, w, h);
@@ -565,8 +580,10 @@ pub(super) fn extract(
                 if shadowed | mixed == 0 {
                     continue;
                 }
-                let point = work.point_at((x, y), (sx, sy), row, column, mixed != 0);
-                band.active.push(Active { shadowed, mixed, point });
+                let surfaces = &mut band.surfaces;
+                let point = work.point_at((x, y), (sx, sy), row, column, mixed != 0, |found| surfaces.push(found));
+                let (here, world) = point.unwrap_or((DVec4::NAN, DVec3::NAN));
+                band.active.push(Active { shadowed, mixed, here, world });
             }
         }
     };
@@ -586,7 +603,7 @@ pub(super) fn extract(
             & slots;
         if fresh != 0 {
             let (mut relevant, mut boundary) = ([0usize; 32], [0usize; 32]);
-            for pixel in active().filter(|pixel| pixel.point.is_some()) {
+            for pixel in active().filter(|pixel| pixel.is_valid()) {
                 for bit in set_bits((pixel.shadowed | pixel.mixed) & fresh) {
                     relevant[bit] += 1;
                 }
@@ -605,15 +622,26 @@ pub(super) fn extract(
         // Counted here and added at the end: the counts are the same, without
         // a loop over every light at every pixel.
         let mut shadowed = [0usize; 32];
-        for pixel in active() {
-            let (shadowed_bits, mixed_bits) = (pixel.shadowed & slots, pixel.mixed & slots);
-            if shadowed_bits | mixed_bits == 0 {
-                continue;
+        for band in bands {
+            // The band's surfaces, one per valid pixel with a boundary slot
+            // (of any share), in the same order.
+            let mut surfaces = band.surfaces.iter();
+            for pixel in &band.active {
+                let valid = pixel.is_valid();
+                let surface = if valid && pixel.mixed != 0 {
+                    surfaces.next().expect("a surface per valid boundary pixel").as_ref()
+                } else {
+                    None
+                };
+                let (shadowed_bits, mixed_bits) = (pixel.shadowed & slots, pixel.mixed & slots);
+                if shadowed_bits | mixed_bits == 0 {
+                    continue;
+                }
+                for bit in set_bits(shadowed_bits) {
+                    shadowed[bit] += 1;
+                }
+                work.emit(all, first, valid.then_some((pixel.here, pixel.world)), surface, shadowed_bits, mixed_bits);
             }
-            for bit in set_bits(shadowed_bits) {
-                shadowed[bit] += 1;
-            }
-            work.emit(all, first, &pixel.point, shadowed_bits, mixed_bits);
         }
         let covered: usize = bands.iter().map(|band| band.covered).sum();
         for (samples, &shadowed) in all.iter_mut().zip(&shadowed[first..]) {
@@ -657,10 +685,14 @@ struct PixelWork<'a> {
 
 impl PixelWork<'_> {
     /// The light-independent work at one covered pixel with an active slot
-    /// (shadowed or at a shadow boundary): its world point, and its surface
-    /// derivatives when some slot has a boundary there (`mixed`); `None`
-    /// where the point is not finite or behind the eye. `row` and `column`
-    /// are the pixel's terms of the unprojection.
+    /// (shadowed or at a shadow boundary): its world point (homogeneous,
+    /// `w > 0`, and dehomogenised), and its surface derivatives when some
+    /// slot has a boundary there (`mixed`), given to `surface` (`None` at a
+    /// depth discontinuity); `None` where the point is not finite or behind
+    /// the eye (and `surface` is not called). `row` and `column` are the
+    /// pixel's terms of the unprojection. (The surface goes to a callback
+    /// rather than into the result: a result that large is moved with
+    /// `memcpy` calls.)
     #[inline(always)]
     fn point_at(
         &self,
@@ -669,7 +701,8 @@ impl PixelWork<'_> {
         row: DVec4,
         column: DVec4,
         mixed: bool,
-    ) -> Option<Point> {
+        surface: impl FnOnce(Option<Surface>),
+    ) -> Option<(DVec4, DVec3)> {
         let pixels = &self.pixels;
         let d = pixels.depth(pixels.index(x, y));
         // Homogeneous world point of screen (x1, x2, depth), scaled to w > 0:
@@ -684,12 +717,10 @@ impl PixelWork<'_> {
             return None;
         }
         let world = here.truncate() / here.w;
-        let surface = if mixed {
-            surface_at(pixels, m, self.viewer, self.options, (x, y), (sx, sy, d), here, world, self.step)
-        } else {
-            None
-        };
-        Some(Point { here, world, surface })
+        if mixed {
+            surface(surface_at(pixels, m, self.viewer, self.options, (x, y), (sx, sy, d), here, world, self.step));
+        }
+        Some((here, world))
     }
 
     /// The per-light work at that pixel, in pixel order: the relevant
@@ -697,26 +728,37 @@ impl PixelWork<'_> {
     /// boundary samples of the slots in `mixed_bits` (`all` is the slots
     /// from `first`).
     #[inline(always)]
-    fn emit(&self, all: &mut [Samples], first: usize, point: &Option<Point>, shadowed_bits: u32, mixed_bits: u32) {
+    fn emit(
+        &self,
+        all: &mut [Samples],
+        first: usize,
+        point: Option<(DVec4, DVec3)>,
+        surface: Option<&Surface>,
+        shadowed_bits: u32,
+        mixed_bits: u32,
+    ) {
         let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
-        let active = shadowed_bits | mixed_bits;
-        let Some(Point { here, world, surface }) = *point else {
-            for bit in set_bits(active) {
+        let Some((here, world)) = point else {
+            for bit in set_bits(shadowed_bits | mixed_bits) {
                 all[bit - first].counts.rejected_invalid += 1;
             }
             return;
         };
-        for bit in set_bits(active) {
+        // Each slot's lists are its own, so the slots without a boundary
+        // here (only relevant samples) go first, in a loop of their own.
+        for bit in set_bits(shadowed_bits & !mixed_bits) {
+            let samples = &mut all[bit - first];
+            samples.relevant.push(to_light(&self.rows[bit], here));
+            samples.relevant_world.push(world);
+        }
+        for bit in set_bits(mixed_bits) {
             let samples = &mut all[bit - first];
             let rows = &self.rows[bit];
             let x_light = to_light(rows, here);
             samples.relevant.push(x_light);
             samples.relevant_world.push(world);
-            if mixed_bits >> bit & 1 == 0 {
-                continue;
-            }
             samples.counts.boundary_candidates += 1;
-            let Some(found) = surface else {
+            let Some(&found) = surface else {
                 samples.counts.rejected_discontinuity += 1;
                 continue;
             };
@@ -739,29 +781,38 @@ impl PixelWork<'_> {
     }
 }
 
-/// A pixel active for some light, with its light-independent work.
+/// A pixel active for some light, with its world point (its surface, where
+/// some slot has a boundary, is in [`Band::surfaces`]: kept apart, an active
+/// pixel is 64 bytes instead of 160, and each share of the lights reads
+/// every active pixel).
 #[derive(Clone, Copy, Debug)]
 struct Active {
     /// Slots shadowed there.
     shadowed: u32,
     /// Slots with a shadow boundary there.
     mixed: u32,
-    point: Option<Point>,
+    /// The homogeneous world point (`w > 0`); NaN where the point is not finite or behind the eye
+    /// (see [`Self::is_valid`]).
+    here: DVec4,
+    /// The world point.
+    world: DVec3,
 }
 
-/// A pixel's world point (homogeneous, `w > 0`, and dehomogenised) and, at a
-/// shadow boundary, its surface (`None` at a depth discontinuity).
-#[derive(Clone, Copy, Debug)]
-struct Point {
-    here: DVec4,
-    world: DVec3,
-    surface: Option<Surface>,
+impl Active {
+    /// The point is finite and in front of the eye (`here.w > 0`).
+    #[inline]
+    fn is_valid(&self) -> bool {
+        self.here.w > 0.0
+    }
 }
 
 /// A band of rows' active pixels, in pixel order, and its covered pixels.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Band {
     active: Vec<Active>,
+    /// The surface of each valid active pixel with a boundary slot, in
+    /// pixel order.
+    surfaces: Vec<Option<Surface>>,
     covered: usize,
 }
 

@@ -246,6 +246,9 @@ pub struct Optimizer {
     projected: Vec<DVec2>,
     extreme: Vec<DVec3>,
     badness: Vec<f64>,
+    /// The boundary samples four at a time, component by component (filled
+    /// by [`prepare`](Self::prepare) for the candidates' objectives).
+    groups: objective::BoundaryGroups,
     /// Scratch of the extreme rays' hull and of the enclosing cone.
     sorted: Vec<DVec2>,
     hull: Vec<DVec2>,
@@ -272,6 +275,7 @@ impl Optimizer {
             projected: Vec::new(),
             extreme: Vec::new(),
             badness: Vec::new(),
+            groups: objective::BoundaryGroups::default(),
             sorted: Vec::new(),
             hull: Vec::new(),
             units: Vec::new(),
@@ -364,7 +368,7 @@ impl Optimizer {
             matrix.fallback = Some(Fallback::NoUsableSamples);
             return Ok(matrix);
         }
-        self.find_extreme_rays(samples)?;
+        self.prepare(samples)?;
         let frame = samples.frame;
         let into_frame = |m: &LightMatrix| frame.axis_from_world_row(m.clip_from_world.row(3));
         let start_focused = self.candidate(samples, into_frame(&focused));
@@ -494,8 +498,16 @@ impl Optimizer {
     /// # Errors
     /// [`LixelError::UnusableSamples`] when the samples have no extreme rays.
     pub fn objective_for_axis(&mut self, samples: &Samples, axis: DVec3) -> Result<Option<f64>> {
-        self.find_extreme_rays(samples)?;
+        self.prepare(samples)?;
         Ok(self.candidate(samples, axis).map(|c| c.objective))
+    }
+
+    /// What every candidate of `samples` needs: the extreme rays and the
+    /// boundary samples' groups.
+    fn prepare(&mut self, samples: &Samples) -> Result<()> {
+        self.find_extreme_rays(samples)?;
+        self.groups.fill(&samples.boundary);
+        Ok(())
     }
 
     /// The relevant samples' extreme rays: the vertices of their hull on one
@@ -556,10 +568,12 @@ impl Optimizer {
             map: samples.problem.map_size(),
             fit: &fit,
             tolerances: samples.problem.tolerances(),
+            // The extreme rays are the relevant samples' hull, in order.
+            polygon: true,
         };
         let homography = fit_homography(&setup, axis, &self.extreme, &mut self.fit, &mut self.projected)?;
         let texel = objective::texel_homography(&homography, samples.problem.map_size());
-        let value = objective::objective_below(&texel, &samples.boundary, bound)?;
+        let value = objective::objective_below(&texel, &self.groups, &samples.boundary, bound)?;
         value.is_finite().then_some(Candidate { axis: homography.row(2), homography, objective: value })
     }
 
@@ -576,7 +590,7 @@ impl Optimizer {
 
     fn median(&mut self, samples: &Samples, homography: &DMat3) -> f64 {
         let texel = objective::texel_homography(homography, samples.problem.map_size());
-        objective::median_badness(&texel, &samples.boundary, &mut self.badness)
+        objective::median_badness(&texel, &self.groups, &samples.boundary, &mut self.badness)
     }
 
     fn finish(&self, samples: &Samples, homography: DMat3) -> LightMatrix {

@@ -70,26 +70,70 @@ pub fn sample_badness(g: &DMat3, s: &BoundarySample) -> f64 {
     parts(g, s).map_or(f64::INFINITY, |p| crate::score::badness_of_jacobian(&p.jac))
 }
 
-/// Samples scored together by [`badness_lanes`].
+/// Samples scored together by [`badness_group`].
 const LANES: usize = 4;
+
+/// `LANES` boundary samples component by component (a structure of arrays
+/// per group): the lanes of [`badness_group`] load each component of four
+/// samples at once instead of gathering it from four samples.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SampleGroup {
+    /// `light.x`, `light.y`, `light.z` of each lane.
+    light: [[f64; LANES]; 3],
+    d_dx: [[f64; LANES]; 3],
+    d_dy: [[f64; LANES]; 3],
+}
+
+impl SampleGroup {
+    #[inline]
+    fn new(s: &[BoundarySample; LANES]) -> Self {
+        let column = |v: [DVec3; LANES]| {
+            [[v[0].x, v[1].x, v[2].x, v[3].x], [v[0].y, v[1].y, v[2].y, v[3].y], [v[0].z, v[1].z, v[2].z, v[3].z]]
+        };
+        Self { light: column(s.map(|s| s.light)), d_dx: column(s.map(|s| s.d_dx)), d_dy: column(s.map(|s| s.d_dy)) }
+    }
+}
+
+/// The boundary samples as [`SampleGroup`]s, built once per optimization
+/// (in the optimizer's workspace) for the candidates' objectives and
+/// medians: every whole group of `LANES` samples, in order; the remainder
+/// (`len % LANES` samples) stays in the samples' slice.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct BoundaryGroups {
+    groups: Vec<SampleGroup>,
+}
+
+impl BoundaryGroups {
+    /// Rebuilds the groups for `samples`, reusing the buffer.
+    pub(crate) fn fill(&mut self, samples: &[BoundarySample]) {
+        self.groups.clear();
+        self.groups.extend(samples.chunks_exact(LANES).map(|c| SampleGroup::new(c.try_into().expect("chunks_exact"))));
+    }
+
+    /// The groups and the remainder of `samples` (the slice they were
+    /// filled from).
+    fn split<'a>(&'a self, samples: &'a [BoundarySample]) -> (&'a [SampleGroup], &'a [BoundarySample]) {
+        assert_eq!(self.groups.len(), samples.len() / LANES, "groups filled from other samples");
+        (&self.groups, &samples[self.groups.len() * LANES..])
+    }
+}
 
 /// [`sample_badness`] of `LANES` samples at once: every lane does the same
 /// operations in the same order as `sample_badness` (glam's dot products
 /// `(x·x' + y·y') + z·z'`, its determinant and squared lengths), so each
 /// lane's value is `sample_badness`'s bit for bit; written lane by lane the
-/// compiler packs them into vector instructions (about half the
-/// instructions per sample).
+/// compiler packs them into vector instructions.
 #[inline(always)]
-fn badness_lanes(g: &DMat3, s: &[BoundarySample; LANES]) -> [f64; LANES] {
+fn badness_group(g: &DMat3, s: &SampleGroup) -> [f64; LANES] {
     let (g1, g2, j) = (g.row(0), g.row(1), g.row(2));
-    let dot = |r: DVec3, v: DVec3| (r.x * v.x) + (r.y * v.y) + (r.z * v.z);
+    let dot = |r: DVec3, v: &[[f64; LANES]; 3], k: usize| (r.x * v[0][k]) + (r.y * v[1][k]) + (r.z * v[2][k]);
     let mut out = [0.0; LANES];
-    for k in 0..LANES {
-        let (p, dx, dy) = (s[k].light, s[k].d_dx, s[k].d_dy);
-        let w = dot(j, p);
-        let (a0, a1) = (dot(g1, p), dot(g2, p));
-        let (c00, c10, c01, c11) = (dot(g1, dx), dot(g2, dx), dot(g1, dy), dot(g2, dy));
-        let (e0, e1) = (dot(j, dx), dot(j, dy));
+    for (k, out) in out.iter_mut().enumerate() {
+        let (p, dx, dy) = (&s.light, &s.d_dx, &s.d_dy);
+        let w = dot(j, p, k);
+        let (a0, a1) = (dot(g1, p, k), dot(g2, p, k));
+        let (c00, c10, c01, c11) = (dot(g1, dx, k), dot(g2, dx, k), dot(g1, dy, k), dot(g2, dy, k));
+        let (e0, e1) = (dot(j, dx, k), dot(j, dy, k));
         let inv_w = 1.0 / w;
         let (t0, t1) = (e0 * inv_w * inv_w, e1 * inv_w * inv_w);
         let (j00, j10) = (c00 * inv_w - a0 * t0, c10 * inv_w - a1 * t0);
@@ -97,7 +141,7 @@ fn badness_lanes(g: &DMat3, s: &[BoundarySample; LANES]) -> [f64; LANES] {
         let det = j00 * j11 - j10 * j01;
         let frob = (j00 * j00 + j10 * j10) + (j01 * j01 + j11 * j11);
         let b = frob / (det * det);
-        out[k] = if !(w > 0.0) || det == 0.0 { f64::INFINITY } else { b };
+        *out = if !(w > 0.0) || det == 0.0 { f64::INFINITY } else { b };
     }
     out
 }
@@ -163,22 +207,27 @@ pub fn objective(g: &DMat3, samples: &[BoundarySample]) -> f64 {
 /// sum, so a partial sum at or above `bound` means the whole one is too.
 /// When it returns a value, that value is [`objective`]'s bit for bit (the
 /// same terms added in the same order; for non-negative terms the start
-/// value's sign does not matter).
+/// value's sign does not matter). `groups` holds `samples` as filled by
+/// [`BoundaryGroups::fill`].
 #[must_use]
-pub(crate) fn objective_below(g: &DMat3, samples: &[BoundarySample], bound: f64) -> Option<f64> {
+pub(crate) fn objective_below(
+    g: &DMat3,
+    groups: &BoundaryGroups,
+    samples: &[BoundarySample],
+    bound: f64,
+) -> Option<f64> {
+    let (groups, rest) = groups.split(samples);
     let mut total = 0.0;
-    let mut lanes = samples.chunks_exact(LANES);
-    for chunk in &mut lanes {
-        let chunk = chunk.try_into().expect("chunks_exact");
+    for group in groups {
         // Added one by one, in order: the same sum and the same stop.
-        for b in badness_lanes(g, chunk) {
+        for b in badness_group(g, group) {
             total += b;
             if total >= bound {
                 return None;
             }
         }
     }
-    for s in lanes.remainder() {
+    for s in rest {
         total += sample_badness(g, s);
         if total >= bound {
             return None;
@@ -222,15 +271,21 @@ pub fn plane_frame_gradient(g: &DMat3, samples: &[BoundarySample]) -> Option<(f6
     Some((h, perp(grad)))
 }
 
-/// Median badness over the samples (`+∞` for none), using `scratch`.
+/// Median badness over the samples (`+∞` for none), using `scratch`;
+/// `groups` as in [`objective_below`].
 #[must_use]
-pub(crate) fn median_badness(g: &DMat3, samples: &[BoundarySample], scratch: &mut Vec<f64>) -> f64 {
+pub(crate) fn median_badness(
+    g: &DMat3,
+    groups: &BoundaryGroups,
+    samples: &[BoundarySample],
+    scratch: &mut Vec<f64>,
+) -> f64 {
+    let (groups, rest) = groups.split(samples);
     scratch.clear();
-    let mut lanes = samples.chunks_exact(LANES);
-    for chunk in &mut lanes {
-        scratch.extend(badness_lanes(g, chunk.try_into().expect("chunks_exact")));
+    for group in groups {
+        scratch.extend(badness_group(g, group));
     }
-    scratch.extend(lanes.remainder().iter().map(|s| sample_badness(g, s)));
+    scratch.extend(rest.iter().map(|s| sample_badness(g, s)));
     if scratch.is_empty() {
         return f64::INFINITY;
     }
@@ -269,7 +324,7 @@ mod tests {
         samples[9].light = DVec3::new(0.0, 0.0, -1.0);
         let mut behind_or_edge_on = 0;
         for chunk in samples.chunks_exact(LANES) {
-            let lanes = badness_lanes(&g, chunk.try_into().unwrap());
+            let lanes = badness_group(&g, &SampleGroup::new(chunk.try_into().unwrap()));
             for (s, b) in chunk.iter().zip(lanes) {
                 let one = sample_badness(&g, s);
                 assert_eq!(b.to_bits(), one.to_bits(), "{s:?}");
@@ -281,7 +336,9 @@ mod tests {
         // lanes' sum is `objective`'s, and it stops below a smaller bound.
         let finite: Vec<_> = samples.iter().copied().filter(|s| sample_badness(&g, s).is_finite()).take(3001).collect();
         let total = objective(&g, &finite);
-        assert_eq!(objective_below(&g, &finite, f64::INFINITY).map(f64::to_bits), Some(total.to_bits()));
-        assert_eq!(objective_below(&g, &finite, total), None);
+        let mut groups = BoundaryGroups::default();
+        groups.fill(&finite);
+        assert_eq!(objective_below(&g, &groups, &finite, f64::INFINITY).map(f64::to_bits), Some(total.to_bits()));
+        assert_eq!(objective_below(&g, &groups, &finite, total), None);
     }
 }
