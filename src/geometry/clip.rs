@@ -428,24 +428,7 @@ impl ConvexPolyhedron {
         }
         // The cap: one simple cycle through `boundary_len` cut points.
         let start = indices.len();
-        let mut c = boundary_start;
-        loop {
-            indices.push(kept + c);
-            let next = link[c];
-            if next == u8::MAX {
-                return None;
-            }
-            if usize::from(next) == boundary_start {
-                break;
-            }
-            if indices.len() - start == boundary_len {
-                return None;
-            }
-            c = usize::from(next);
-        }
-        if indices.len() - start != boundary_len {
-            return None;
-        }
+        push_cap_cycle(indices, &link, boundary_start, boundary_len, kept)?;
         faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
         if faces.len() < 4 || !vertices[kept..].iter().all(|v| v.is_finite()) {
             out.clear();
@@ -592,24 +575,7 @@ impl ConvexPolyhedron {
         }
         if boundary_len > 0 {
             let start = indices.len();
-            let mut v = boundary_start;
-            loop {
-                indices.push(v);
-                let next = link[v];
-                if next == u8::MAX {
-                    return None;
-                }
-                if usize::from(next) == boundary_start {
-                    break;
-                }
-                if indices.len() - start == boundary_len {
-                    return None;
-                }
-                v = usize::from(next);
-            }
-            if indices.len() - start != boundary_len {
-                return None;
-            }
+            push_cap_cycle(indices, &link, boundary_start, boundary_len, 0)?;
             faces.push(FaceSpan { plane: *plane, start, end: indices.len() });
         }
         // `finish_parts`: at least four faces, finite cut points (the kept
@@ -903,6 +869,31 @@ impl LoopWalker {
             }
         }
     }
+}
+
+/// Pushes a small clip's cap as vertex indices `offset + point`: the cycle of
+/// cut points from `start` along `link` (each point's successor, `u8::MAX`
+/// for none). `None` (the caller takes the general clip) unless the links
+/// close one simple cycle through exactly `len` points.
+#[inline(always)]
+fn push_cap_cycle(indices: &mut Vec<usize>, link: &[u8], start: usize, len: usize, offset: usize) -> Option<()> {
+    let first = indices.len();
+    let mut point = start;
+    loop {
+        indices.push(offset + point);
+        let next = link[point];
+        if next == u8::MAX {
+            return None;
+        }
+        if usize::from(next) == start {
+            break;
+        }
+        if indices.len() - first == len {
+            return None;
+        }
+        point = usize::from(next);
+    }
+    (indices.len() - first == len).then_some(())
 }
 
 /// The loops [`LoopWalker`] finds for the given faces (for tests).
