@@ -856,6 +856,30 @@ mod tests {
         ConvexPolyhedron::from_aabb(DVec3::ZERO, DVec3::ONE)
     }
 
+    /// A hundred unit cubes, each cut by up to eight random planes through
+    /// its middle; `visit` sees the body after every cut that leaves one.
+    fn for_random_clipped_cubes<R: FnMut() -> f64>(
+        random: &mut R,
+        workspace: &mut ClipWorkspace,
+        mut visit: impl FnMut(&ConvexPolyhedron, &mut R),
+    ) {
+        for _ in 0..100 {
+            let mut body = unit_cube();
+            for _ in 0..8 {
+                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
+                let Some(n) = n.try_normalize() else { continue };
+                let plane = Plane::from_point_normal(body.centroid() + n * (random() - 0.5) * 0.5, n);
+                let mut next = ConvexPolyhedron::empty();
+                body.clip_into(&plane, 1e-9, &mut next, workspace);
+                if next.is_empty() {
+                    break;
+                }
+                body = next;
+                visit(&body, random);
+            }
+        }
+    }
+
     /// The shared [`ConvexPolyhedron::sanity_check`], plus a centroid inside
     /// and a positive volume.
     fn assert_valid(body: &ConvexPolyhedron) {
@@ -1225,22 +1249,10 @@ mod tests {
             usize::from(!small.is_empty())
         };
         let mut silhouettes = 0;
-        for _ in 0..100 {
-            let mut body = unit_cube();
-            for _ in 0..8 {
-                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
-                let Some(n) = n.try_normalize() else { continue };
-                let plane = Plane::from_point_normal(body.centroid() + n * (random() - 0.5) * 0.5, n);
-                let mut next = ConvexPolyhedron::empty();
-                body.clip_into(&plane, 1e-9, &mut next, &mut workspace);
-                if next.is_empty() {
-                    break;
-                }
-                body = next;
-                let removed: Vec<bool> = (0..body.face_count()).map(|_| random() < 0.4).collect();
-                silhouettes += check(&body, &removed);
-            }
-        }
+        for_random_clipped_cubes(&mut random, &mut workspace, |body, random| {
+            let removed: Vec<bool> = (0..body.face_count()).map(|_| random() < 0.4).collect();
+            silhouettes += check(body, &removed);
+        });
         assert!(silhouettes > 100, "{silhouettes}");
         // A directed edge run by two faces: the later face is across.
         let mut doubled = unit_cube();
@@ -1265,21 +1277,7 @@ mod tests {
                 }
             }
         };
-        for _ in 0..100 {
-            let mut body = unit_cube();
-            for _ in 0..8 {
-                let n = DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5);
-                let Some(n) = n.try_normalize() else { continue };
-                let plane = Plane::from_point_normal(body.centroid() + n * (random() - 0.5) * 0.5, n);
-                let mut next = ConvexPolyhedron::empty();
-                body.clip_into(&plane, 1e-9, &mut next, &mut workspace);
-                if next.is_empty() {
-                    break;
-                }
-                body = next;
-                check(&body, &mut half);
-            }
-        }
+        for_random_clipped_cubes(&mut random, &mut workspace, |body, _| check(body, &mut half));
         // A directed edge run by two faces: the map keeps the later face.
         let mut doubled = unit_cube();
         let first = doubled.faces[0];
