@@ -404,6 +404,18 @@ impl AaPass {
         wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() }
     }
 
+    /// Binding 0 of the pass groups: one light's parameters.
+    fn params_entry(&self) -> wgpu::BindGroupEntry<'_> {
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.params,
+                offset: 0,
+                size: wgpu::BufferSize::new(std::mem::size_of::<ParamsRaw>() as u64),
+            }),
+        }
+    }
+
     fn ensure(&mut self, device: &wgpu::Device, map_texels: u64, tiles: u64, pixels: u64, lights: u64, triangles: u64) {
         if self.sized.as_ref().is_some_and(|s| {
             s.map_texels >= map_texels
@@ -498,14 +510,7 @@ impl AaPass {
             label: Some("lixel aa group 1"),
             layout: &self.group1,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.params,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<ParamsRaw>() as u64),
-                    }),
-                },
+                self.params_entry(),
                 Self::buffer(1, &self.edges),
                 Self::buffer(2, &sized.map_words),
                 Self::buffer(3, &sized.tile_words),
@@ -522,14 +527,7 @@ impl AaPass {
             label: Some("lixel aa exact_args group"),
             layout: &self.args_group,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.params,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<ParamsRaw>() as u64),
-                    }),
-                },
+                self.params_entry(),
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
