@@ -407,22 +407,33 @@ fn enter_lists(t: u32, r: vec4<i32>, write: bool) {
             }
             let lo = max(r.xy, vec2<i32>(tx, ty) * PER_TILE);
             let hi = min(r.zw, vec2<i32>(tx, ty) * PER_TILE + vec2<i32>(PER_TILE - 1));
-            for (var ly = lo.y; ly <= hi.y; ly++) {
-                for (var lx = lo.x; lx <= hi.x; lx++) {
-                    let list = list_index(vec2<i32>(lx, ly));
-                    if !write {
-                        atomicAdd(&tile_words[count_slot(list)], 1u);
-                        continue;
-                    }
-                    let slot = atomicLoad(&tile_words[offset_slot(list)]) + atomicAdd(&tile_words[cursor_slot(list)], 1u);
-                    // Past the capacity: dropped; the tile's pixels see the
-                    // overflow and keep the standard bit.
-                    if slot < params.capacity {
-                        tile_list[slot] = t;
-                    }
-                }
-            }
+            // The tile's list tiles (at most 2x2: PER_TILE <= 2) written out, not looped:
+            // llvmpipe ends an invocation's loops after 65 535 iterations,
+            // and a triangle over the whole map visits every tile.
+            enter_list(t, lo, hi, vec2<i32>(0, 0), write);
+            enter_list(t, lo, hi, vec2<i32>(1, 0), write);
+            enter_list(t, lo, hi, vec2<i32>(0, 1), write);
+            enter_list(t, lo, hi, vec2<i32>(1, 1), write);
         }
+    }
+}
+
+// List tile `lo + d` of a tile's range [lo, hi] (`enter_lists`), when in it.
+fn enter_list(t: u32, lo: vec2<i32>, hi: vec2<i32>, d: vec2<i32>, write: bool) {
+    let at = lo + d;
+    if any(at > hi) {
+        return;
+    }
+    let list = list_index(at);
+    if !write {
+        atomicAdd(&tile_words[count_slot(list)], 1u);
+        return;
+    }
+    let slot = atomicLoad(&tile_words[offset_slot(list)]) + atomicAdd(&tile_words[cursor_slot(list)], 1u);
+    // Past the capacity: dropped; the tile's pixels see the overflow and
+    // keep the standard bit.
+    if slot < params.capacity {
+        tile_list[slot] = t;
     }
 }
 
@@ -479,15 +490,61 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     enter_lists(t, triangle_lists(b), false);
 }
 
-// One invocation: the exclusive prefix sum of the tile counts.
-@compute @workgroup_size(1)
-fn tile_scan() {
-    var run = 0u;
-    for (var i = 0u; i < lists_x() * lists_y(); i++) {
-        atomicStore(&tile_words[offset_slot(i)], run);
-        run += atomicLoad(&tile_words[count_slot(i)]);
+// Per invocation of `tile_scan`: the sum of lists [i, i + SCAN_BLOCK) that
+// lie below `end` (`offsets` false), or their offsets from `run` written
+// (true); returns the running sum. Straight-line: llvmpipe ends a shader
+// invocation's loops after 65 535 iterations, all loops together, and a map
+// of 1024² texels has 65 536 lists of 4x4.
+fn scan_block(i: u32, end: u32, run: u32, offsets: bool) -> u32 {
+    var r = scan_one(i, end, run, offsets);
+    r = scan_one(i + 1u, end, r, offsets);
+    r = scan_one(i + 2u, end, r, offsets);
+    r = scan_one(i + 3u, end, r, offsets);
+    r = scan_one(i + 4u, end, r, offsets);
+    r = scan_one(i + 5u, end, r, offsets);
+    r = scan_one(i + 6u, end, r, offsets);
+    return scan_one(i + 7u, end, r, offsets);
+}
+
+fn scan_one(i: u32, end: u32, run: u32, offsets: bool) -> u32 {
+    if i >= end {
+        return run;
     }
-    add_stat(STAT_PAIRS, run);
+    if offsets {
+        atomicStore(&tile_words[offset_slot(i)], run);
+    }
+    return run + atomicLoad(&tile_words[count_slot(i)]);
+}
+
+const SCAN_BLOCK: u32 = 8u;
+var<workgroup> chunk_sums: array<u32, 64>;
+
+// One workgroup of 64: the exclusive prefix sum of the list counts, each
+// invocation over a chunk of the lists (summed, then the chunks' sums
+// scanned in the workgroup, then the offsets written), SCAN_BLOCK lists per
+// loop iteration (`scan_block`).
+@compute @workgroup_size(64)
+fn tile_scan(@builtin(local_invocation_index) lid: u32) {
+    let total = lists_x() * lists_y();
+    let chunk = (total + 63u) / 64u;
+    let first = min(lid * chunk, total);
+    let end = min(first + chunk, total);
+    var sum = 0u;
+    for (var i = first; i < end; i += SCAN_BLOCK) {
+        sum = scan_block(i, end, sum, false);
+    }
+    chunk_sums[lid] = sum;
+    workgroupBarrier();
+    var run = 0u;
+    for (var j = 0u; j < lid; j++) {
+        run += chunk_sums[j];
+    }
+    for (var i = first; i < end; i += SCAN_BLOCK) {
+        run = scan_block(i, end, run, true);
+    }
+    if lid == 63u {
+        add_stat(STAT_PAIRS, run);
+    }
 }
 
 @compute @workgroup_size(64)
