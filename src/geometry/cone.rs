@@ -69,20 +69,21 @@ pub(crate) fn min_enclosing_cone_in(dirs: &[DVec3], units: &mut Vec<DVec3>) -> O
     let units = units.as_slice();
     let (&first, _) = units.split_first()?;
 
+    // The loops run over the slices before each index (no bounds checks).
     let mut cap = Cap::point(first);
-    for i in 1..units.len() {
-        if cap.contains(units[i]) {
+    for (i, &ui) in units.iter().enumerate().skip(1) {
+        if cap.contains(ui) {
             continue;
         }
-        cap = Cap::point(units[i]);
-        for j in 0..i {
-            if cap.contains(units[j]) {
+        cap = Cap::point(ui);
+        for (j, &uj) in units[..i].iter().enumerate() {
+            if cap.contains(uj) {
                 continue;
             }
-            cap = Cap::through_two(units[i], units[j])?;
-            for k in 0..j {
-                if !cap.contains(units[k]) {
-                    cap = Cap::through_three(units[i], units[j], units[k])?;
+            cap = Cap::through_two(ui, uj)?;
+            for &uk in &units[..j] {
+                if !cap.contains(uk) {
+                    cap = Cap::through_three(ui, uj, uk)?;
                 }
             }
         }
@@ -107,26 +108,32 @@ fn unit(d: DVec3) -> Option<DVec3> {
     (d / d.abs().max_element()).try_normalize()
 }
 
-/// A cap of the unit sphere: the unit vectors within chord distance `chord`
-/// of `axis`.
+/// A cap of the unit sphere: the unit vectors within a chord distance of
+/// `axis` (the farthest of its rim, found when it is made).
 #[derive(Clone, Copy, Debug)]
 struct Cap {
     axis: DVec3,
-    chord: f64,
+    /// `chord + SLACK`, the bound [`Cap::contains`] tests against (summed
+    /// once per cap rather than once per test; the same sum).
+    reach: f64,
 }
 
 impl Cap {
     /// Slack on the chord when testing containment, against rounding.
     const SLACK: f64 = 1e-14;
 
+    fn new(axis: DVec3, chord: f64) -> Cap {
+        Cap { axis, reach: chord + Self::SLACK }
+    }
+
     fn point(u: DVec3) -> Cap {
-        Cap { axis: u, chord: 0.0 }
+        Cap::new(u, 0.0)
     }
 
     /// The cap around `axis` reaching just the farthest of `rim`.
     fn around(axis: DVec3, rim: &[DVec3]) -> Cap {
         let chord = rim.iter().map(|&u| (u - axis).length()).fold(0.0, f64::max);
-        Cap { axis, chord }
+        Cap::new(axis, chord)
     }
 
     /// The smallest cap with `u` and `v` on its rim; `None` when they are
@@ -158,7 +165,7 @@ impl Cap {
     }
 
     fn contains(&self, u: DVec3) -> bool {
-        (u - self.axis).length() <= self.chord + Self::SLACK
+        (u - self.axis).length() <= self.reach
     }
 }
 
