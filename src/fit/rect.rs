@@ -215,7 +215,13 @@ const AREA_TIE: f64 = 1e-9;
 /// rectangle, not whichever rounding favours, so a tiny change of the input
 /// moves the map continuously. Two caliper passes, no allocation.
 fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
-    caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 32])
+    // (A calipers pass visits each edge at most once: a hull of up to 16
+    // vertices fits the smaller array, which is less to clear.)
+    if hull.len() <= 16 {
+        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 16])
+    } else {
+        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 32])
+    }
 }
 
 /// [`caliper_best_edge`] with the first pass's visits kept in `kept` for
