@@ -240,6 +240,12 @@ impl ShadowProblem {
     /// [`Self::prepare_view`], and the view body computed (`ws.view.view_body`).
     fn prepare_view_body(&self, ws: &mut SolveWorkspace) {
         self.prepare_view(ws);
+        self.view_body_in_prepared(ws);
+    }
+
+    /// The view body computed into the camera cache, which was prepared
+    /// for this problem already.
+    fn view_body_in_prepared(&self, ws: &mut SolveWorkspace) {
         if ws.view.view_body.is_none() {
             let mut body = ws.view.spare_body();
             body.set_frustum_corners(&self.camera.frustum_corners_within(&self.bounds.scene()));
@@ -379,7 +385,16 @@ impl ShadowProblem {
     /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera
     /// cache (and the hull itself when the same light built it last).
     pub(crate) fn psm_hull_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
-        self.prepare_view_body(ws);
+        self.prepare_view(ws);
+        self.psm_hull_into_prepared(out, ws);
+    }
+
+    /// [`Self::psm_hull_into`] where the camera cache was prepared for this
+    /// problem already (inside [`Self::with_visible_receiver_body`], which
+    /// prepares it and lets nothing else touch it before `f` runs): the
+    /// cache's key is not compared again.
+    pub(crate) fn psm_hull_into_prepared(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
+        self.view_body_in_prepared(ws);
         let light = light_bits(&self.light);
         if ws.view.psm_hull.get_into(&light, out) {
             return;

@@ -133,7 +133,8 @@ fn solve_for(
         return super::focused::around(problem, focus, Method::Psm, Some(Fallback::OrthographicCamera), ws);
     }
     let mut hull = ws.take_body();
-    problem.psm_hull_into(&mut hull, ws);
+    // The camera cache was prepared by `with_visible_receiver_body`.
+    problem.psm_hull_into_prepared(&mut hull, ws);
     let frame = problem.frame_towards(focus);
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
