@@ -132,17 +132,16 @@ fn solve_for(
     if problem.camera().is_orthographic() {
         return super::focused::around(problem, focus, Method::Psm, Some(Fallback::OrthographicCamera), ws);
     }
-    let mut hull = ws.take_body();
-    // The camera cache was prepared by `with_visible_receiver_body`.
-    problem.psm_hull_into_prepared(&mut hull, ws);
     let frame = problem.frame_towards(focus);
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
     // alone, and failing that use the focused map.
     // (Each result is returned as it came, not unwrapped and wrapped again:
-    // a matrix is moved once fewer.)
-    let first = attempt(problem, options, frame, &hull, focus, None, ws);
-    ws.put_body(hull);
+    // a matrix is moved once fewer.) The camera cache was prepared by
+    // `with_visible_receiver_body`.
+    let hull = problem.lend_psm_hull_prepared(ws);
+    let first = attempt(problem, options, frame, &hull.body, focus, None, ws);
+    problem.give_back_psm_hull(hull, ws);
     if first.is_ok() {
         return first;
     }
