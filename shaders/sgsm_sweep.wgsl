@@ -241,18 +241,30 @@ fn sgsm_classify(k: vec2<i32>, corners: array<vec3<i32>, 4>) -> u32 {
     return sgsm_word(slots, status, sgsm_pattern_index(labels), codes);
 }
 
+// Texels per invocation: a row is swept in segments of this many texels,
+// one invocation each (SEGMENT in src/render/sgsm/gpu.rs). The CPU backends
+// (llvmpipe, lavapipe) end every loop of an invocation once it has run
+// 65 535 loop iterations, all loops together; a texel costs up to ≈ 230
+// (its loops counted as written), so a whole 1024-texel row was cut near
+// its middle. 128 texels stay below ≈ 30 000. The segment starts as a row
+// did (window and corners loaded at its first texel), so the words are the
+// same.
+const SGSM_SEGMENT: i32 = 128;
+
 @compute @workgroup_size(64)
 fn sgsm_sweep(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = vec2<i32>(sgsm_sweep_params.size);
     let y = i32(id.x);
-    if y >= size.y {
+    let start = i32(id.y) * SGSM_SEGMENT;
+    if y >= size.y || start >= size.x {
         return;
     }
-    sgsm_window_load(0, y);
-    var top = sgsm_corner(vec2<i32>(0, y));
-    var bottom = sgsm_corner(vec2<i32>(0, y + 1));
-    for (var x = 0; x < size.x; x++) {
-        if x > 0 {
+    let end = min(start + SGSM_SEGMENT, size.x);
+    sgsm_window_load(start, y);
+    var top = sgsm_corner(vec2<i32>(start, y));
+    var bottom = sgsm_corner(vec2<i32>(start, y + 1));
+    for (var x = start; x < end; x++) {
+        if x > start {
             sgsm_window_step();
         }
         let next_top = sgsm_corner(vec2<i32>(x + 1, y));

@@ -183,13 +183,27 @@ fn run_compute(device: &wgpu::Device, queue: &wgpu::Queue, source: &str, words: 
 /// back), for a directional and a point light on the tiny scene.
 #[test]
 fn gpu_sweep_matches_the_cpu_reference() {
+    // Measured (lavapipe, 96² focused maps): 0 and 0 words differ; 0 and 27
+    // corner ties broken differently.
+    sweep_matches_the_cpu_at(96);
+}
+
+/// The same at 1024² maps, whose rows are longer than the CPU backends'
+/// loop limit allows one invocation to sweep (65 535 loop iterations, all
+/// loops together; a texel costs up to ≈ 230): one invocation per row cut
+/// every row near column 550 on lavapipe and llvmpipe (checked by putting
+/// main's shader back). Issue-18 note, session 12 (hloop).
+#[test]
+fn gpu_sweep_matches_the_cpu_reference_on_long_rows() {
+    sweep_matches_the_cpu_at(1024);
+}
+
+fn sweep_matches_the_cpu_at(size: u32) {
     let Some((device, queue)) = gpu() else { return };
     let scene = tiny_scene();
     let camera = walkthrough_camera(64);
-    // Measured (lavapipe, 96² focused maps): 0 and 0 words differ; 0 and 27
-    // corner ties broken differently.
     let lights = test_lights();
-    let m = matrices(&scene, &camera, &lights, 96, &Parameterization::Focused);
+    let m = matrices(&scene, &camera, &lights, size, &Parameterization::Focused);
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
     renderer.render(&Frame { lookup: SGSM, ..Frame::new(&camera, &m) }).unwrap();
     for (light, matrix) in m.iter().enumerate() {

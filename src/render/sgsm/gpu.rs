@@ -16,6 +16,11 @@ pub(crate) const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint
 const SLOT_STRIDE: u64 = 256;
 /// Rows per workgroup (`@workgroup_size` in `sgsm_sweep.wgsl`).
 const WORKGROUP: u32 = 64;
+/// Texels of a row per invocation (`SGSM_SEGMENT` in `sgsm_sweep.wgsl`):
+/// the CPU backends' loop limit (65 535 iterations per invocation) cut a
+/// whole row's sweep at 1024-texel maps. Workgroups: rows / 64 by
+/// columns / 128, at most 128 × 64 for an 8192² map.
+const SEGMENT: u32 = 128;
 
 /// The sweep pipeline and the lookup's counters.
 pub(crate) struct SweepPass {
@@ -169,7 +174,8 @@ impl SweepPass {
         SgsmMaps { normals, normal_layers, masks, masks_view, bind_group }
     }
 
-    /// Sweeps maps `0..sizes.len()` (sizes in texels), one dispatch each.
+    /// Sweeps maps `0..sizes.len()` (sizes in texels), one dispatch each: an
+    /// invocation per row segment of [`SEGMENT`] texels.
     pub(crate) fn encode(
         &self,
         queue: &wgpu::Queue,
@@ -190,9 +196,9 @@ impl SweepPass {
         let mut pass = encoder
             .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("lixel sgsm sweep"), timestamp_writes });
         pass.set_pipeline(&self.pipeline);
-        for (i, (_, h)) in sizes.iter().enumerate() {
+        for (i, (w, h)) in sizes.iter().enumerate() {
             pass.set_bind_group(0, &maps.bind_group, &[(i as u64 * SLOT_STRIDE) as u32]);
-            pass.dispatch_workgroups(h.div_ceil(WORKGROUP), 1, 1);
+            pass.dispatch_workgroups(h.div_ceil(WORKGROUP), w.div_ceil(SEGMENT), 1);
         }
     }
 }
