@@ -394,6 +394,25 @@ fn triangle_lists(b: vec4<f32>) -> vec4<i32> {
     return vec4<i32>(a / i32(LIST_TILE), c / i32(LIST_TILE));
 }
 
+// The most TILE tiles a triangle's box may span along x or along y for
+// `enter_lists`: its loops run (rows) x (columns + 1) iterations, and the CPU
+// backends (llvmpipe, lavapipe) end an invocation's loops after 65 535
+// iterations, all loops together (a SIMD batch's lanes share the count, so
+// the bound is per side: 240 x 241 = 57 840). Reached only by maps wider
+// than 1920 texels (240 tiles of 8).
+const ENTER_MAX_SIDE: i32 = 240;
+
+// Whether the lists `r` (list tiles) span more TILE tiles than
+// `enter_lists` may visit (ENTER_MAX_SIDE).
+fn enter_too_long(r: vec4<i32>) -> bool {
+    if r.z < r.x {
+        return false;
+    }
+    let rows = r.w / PER_TILE - r.y / PER_TILE + 1;
+    let cols = r.z / PER_TILE - r.x / PER_TILE + 1;
+    return rows > ENTER_MAX_SIDE || cols > ENTER_MAX_SIDE;
+}
+
 // Adds triangle `t` to the lists `r` (list tiles, `triangle_lists`) of
 // active TILE tiles: counts them (`write` false) or writes them.
 fn enter_lists(t: u32, r: vec4<i32>, write: bool) {
@@ -408,8 +427,8 @@ fn enter_lists(t: u32, r: vec4<i32>, write: bool) {
             let lo = max(r.xy, vec2<i32>(tx, ty) * PER_TILE);
             let hi = min(r.zw, vec2<i32>(tx, ty) * PER_TILE + vec2<i32>(PER_TILE - 1));
             // The tile's list tiles (at most 2x2: PER_TILE <= 2) written out, not looped:
-            // llvmpipe ends an invocation's loops after 65 535 iterations,
-            // and a triangle over the whole map visits every tile.
+            // llvmpipe ends an invocation's loops after 65 535 iterations
+            // (see ENTER_MAX_SIDE).
             enter_list(t, lo, hi, vec2<i32>(0, 0), write);
             enter_list(t, lo, hi, vec2<i32>(1, 0), write);
             enter_list(t, lo, hi, vec2<i32>(0, 1), write);
@@ -487,7 +506,16 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     let b = triangle_box(t);
     store_box(params.box_base + 4u * t, b);
     store_box(params.screen_base + 4u * t, screen_box(t));
-    enter_lists(t, triangle_lists(b), false);
+    let r = triangle_lists(b);
+    if enter_too_long(r) {
+        // Refused, never cut silently: list 0's count is raised past the
+        // capacity, so every list's end lies past it and every pixel of the
+        // light keeps the standard bit, counted in STAT_OVERFLOW (and
+        // STAT_PAIRS reads above the capacity).
+        atomicMax(&tile_words[count_slot(0u)], params.capacity + 1u);
+        return;
+    }
+    enter_lists(t, r, false);
 }
 
 // Per invocation of `tile_scan`: the sum of lists [i, i + SCAN_BLOCK) that
@@ -553,7 +581,11 @@ fn tile_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if t >= params.triangle_count {
         return;
     }
-    enter_lists(t, triangle_lists(stored_box(t)), true);
+    let r = triangle_lists(stored_box(t));
+    if enter_too_long(r) {
+        return;
+    }
+    enter_lists(t, r, true);
 }
 
 // The table's mask of line (a, b, c): samples s with a s.x + b s.y + c >= 0

@@ -674,3 +674,43 @@ fn a_list_longer_than_the_loop_limit_keeps_the_words() {
     // The filler's list was read: more entries than the loop limit.
     assert!(stats.entries_scanned >= plain_stats.entries_scanned + 65_535, "{stats:?}");
 }
+
+/// A triangle whose box spans more than 240 tiles of 8 texels along a side
+/// (here one under the floor, across the whole 2048² map) would take
+/// `enter_lists` past the CPU backends' loop limit (65 535 iterations per
+/// invocation), which cut it silently on main: the light is refused
+/// instead, every pixel keeping the standard bit and counted as overflowed.
+/// Issue-18 note, session 12 (hloop).
+#[test]
+fn a_triangle_over_too_many_tiles_refuses_the_light() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let cam = camera(48);
+    let light = test_lights()[0];
+    let frame_m = matrices(&scene, &cam, &[light], 2048, &Parameterization::Focused);
+    let Light::Directional { direction } = light else { panic!("the sun") };
+    let d = direction.normalize();
+    let (u, v) = d.any_orthonormal_pair();
+    let centre = scene.bounds().receivers.center() + d * 50.0;
+    let mut big = Mesh::default();
+    for corner in [u * -1e3 + v * -1e3, u * 3e3 + v * -1e3, u * -1e3 + v * 3e3] {
+        big.positions.push((centre + corner).as_vec3());
+        big.normals.push((-d).as_vec3());
+    }
+    big.indices.extend([0, 1, 2]);
+    let mut objects =
+        vec![SceneObject { name: "big".into(), mesh: big, role: Role::Receiver, albedo: Vec3::splat(0.5) }];
+    objects.extend(scene.objects.iter().cloned());
+    let with_big = Scene { objects };
+    let mut renderer = Renderer::new(&device, &queue, &with_big, RendererOptions::default()).unwrap();
+    renderer.render(&Frame { masks: true, lookup: AA32, ..Frame::new(&cam, &frame_m) }).unwrap();
+    let words = renderer.read_occlusion(0).unwrap();
+    let stats = renderer.read_aa_stats(0).unwrap();
+    let masks = renderer.read_masks().unwrap();
+    eprintln!("{stats:?}");
+    assert!(stats.overflow_pixels > 0 && stats.exact_pixels == 0, "{stats:?}");
+    for i in 0..words.len() {
+        let standard = if masks.shadow[i] & 1 != 0 { u32::MAX } else { 0 };
+        assert_eq!(words[i], standard, "pixel {i} keeps the standard bit");
+    }
+}
