@@ -296,48 +296,86 @@ fn spread(prev: u64, word: u64, next: u64) -> u64 {
 /// One light's boundary pixels into `mixed`: the covered pixels with a
 /// shadowed and a lit pixel in their 3x3 neighbourhood (clamped at the
 /// edges). `covered` and `shadowed` are bit images of `h` rows of `words`
-/// words (pixel `64 k + j` of a row at bit `j` of its word `k`; the bits
-/// beyond the row's pixels zero). One pass spreads the shadowed and the lit
-/// bits along the rows, into `near`; a second ORs three rows of both and
-/// masks them with `covered`: the same bits as `covered & or_3x3(shadowed)
-/// & or_3x3(lit)`, without their separate passes and buffers.
+/// words, `w` pixels a row (pixel `64 k + j` of a row at bit `j` of its
+/// word `k`; the bits beyond the row's pixels zero). The 3x3 OR is the OR
+/// across rows of the spread along the row (shifts distribute over OR), so
+/// one pass spreads the shadowed and the lit bits along the rows together,
+/// into `near`, and a second ORs three rows of both and masks them with
+/// `covered`: the same bits as `covered & or_3x3(shadowed) & or_3x3(lit)`,
+/// without their separate passes and buffers, and with no loop per row
+/// where it can be avoided (a light's image at 180x180 has three words a
+/// row, so the per-row work cost more than the words' own).
 fn boundary_bits(
     covered: &[u64],
     shadowed: &[u64],
+    w: usize,
     words: usize,
     h: usize,
     near: &mut Vec<[u64; 2]>,
     mixed: &mut Vec<u64>,
 ) {
+    let n = covered.len().min(shadowed.len());
     near.clear();
-    near.resize(covered.len(), [0; 2]);
-    for ((c, s), out) in covered.chunks_exact(words).zip(shadowed.chunks_exact(words)).zip(near.chunks_exact_mut(words))
-    {
-        let (mut prev_s, mut prev_l) = (0, 0);
-        let (mut here_s, mut here_l) = (s[0], c[0] & !s[0]);
-        for (k, out) in out.iter_mut().enumerate() {
-            let (next_s, next_l) = match (c.get(k + 1), s.get(k + 1)) {
-                (Some(&c), Some(&s)) => (s, c & !s),
-                _ => (0, 0),
-            };
-            *out = [spread(prev_s, here_s, next_s), spread(prev_l, here_l, next_l)];
-            (prev_s, prev_l, here_s, here_l) = (here_s, here_l, next_s, next_l);
+    near.resize(n, [0; 2]);
+    let both = |i: usize| match (covered.get(i), shadowed.get(i)) {
+        (Some(&c), Some(&s)) => [s, c & !s],
+        _ => [0; 2],
+    };
+    if w % 64 != 0 {
+        // Every word spread with the words before and after it in the
+        // buffer, across rows too: a row's pixels end before bit 63 of its
+        // last word, so the row before carries in nothing (its bits beyond
+        // its pixels are clear), and what the row after carries in lands
+        // beyond this row's pixels, where `covered` clears it below.
+        let (mut prev, mut here) = ([0; 2], both(0));
+        for (i, out) in near.iter_mut().enumerate() {
+            let next = both(i + 1);
+            *out = [spread(prev[0], here[0], next[0]), spread(prev[1], here[1], next[1])];
+            (prev, here) = (here, next);
+        }
+    } else {
+        // Whole words a row: the words beyond a row's ends are none.
+        for (y, out) in near.chunks_exact_mut(words).enumerate() {
+            let (mut prev, mut here) = ([0; 2], both(y * words));
+            for (k, out) in out.iter_mut().enumerate() {
+                let next = if k + 1 < words { both(y * words + k + 1) } else { [0; 2] };
+                *out = [spread(prev[0], here[0], next[0]), spread(prev[1], here[1], next[1])];
+                (prev, here) = (here, next);
+            }
         }
     }
     mixed.clear();
-    mixed.reserve_exact(covered.len());
-    for y in 0..h {
+    mixed.resize(n, 0);
+    if n == 0 || h == 0 {
+        return;
+    }
+    let or3 = |c: u64, a: &[u64; 2], m: &[u64; 2], b: &[u64; 2]| c & (a[0] | m[0] | b[0]) & (a[1] | m[1] | b[1]);
+    // The rows between the first and the last: the rows above and below
+    // are the words `words` before and after, so the whole stretch is
+    // three shifted slices (no loop per row).
+    if h >= 3 {
+        let inner = words..n - words;
+        for ((((out, &c), a), m), b) in mixed[inner.clone()]
+            .iter_mut()
+            .zip(&covered[inner.clone()])
+            .zip(&near[..n - 2 * words])
+            .zip(&near[inner])
+            .zip(&near[2 * words..])
+        {
+            *out = or3(c, a, m, b);
+        }
+    }
+    // The first and the last row, their missing neighbour clamped to
+    // themselves.
+    for y in [0, h - 1] {
         let row = |y: usize| &near[y * words..][..words];
         let (above, here, below) = (row(y.saturating_sub(1)), row(y), row((y + 1).min(h - 1)));
-        let covered = &covered[y * words..][..words];
-        mixed.extend(
-            covered
-                .iter()
-                .zip(above)
-                .zip(here)
-                .zip(below)
-                .map(|(((&c, a), m), b)| c & (a[0] | m[0] | b[0]) & (a[1] | m[1] | b[1])),
-        );
+        let rows = y * words..(y + 1) * words;
+        for ((((out, &c), a), m), b) in
+            mixed[rows.clone()].iter_mut().zip(&covered[rows]).zip(above).zip(here).zip(below)
+        {
+            *out = or3(c, a, m, b);
+        }
     }
 }
 
@@ -391,7 +429,7 @@ impl Classes {
                     shadowed.push(s);
                 });
             }
-            boundary_bits(covered, shadowed, words, h, &mut self.near, &mut self.mixed);
+            boundary_bits(covered, shadowed, w, words, h, &mut self.near, &mut self.mixed);
             return;
         }
         self.one = false;
@@ -1149,7 +1187,7 @@ mod tests {
                     or_3x3_bits(&lit, w, words, h, &mut tmp, &mut near_lit);
                     let expected: Vec<u64> =
                         covered.iter().zip(&near_shadowed).zip(&near_lit).map(|((&c, &s), &l)| c & s & l).collect();
-                    boundary_bits(&covered, &shadowed, words, h, &mut near, &mut mixed);
+                    boundary_bits(&covered, &shadowed, w, words, h, &mut near, &mut mixed);
                     assert_eq!(mixed, expected, "{w}x{h} density {density}");
                     nonzero += usize::from(mixed.iter().any(|&m| m != 0));
                 }
@@ -1157,5 +1195,8 @@ mod tests {
         }
         // Most images have boundary pixels, so the comparison is not of zeros.
         assert!(nonzero > 100, "{nonzero}");
+        // No rows: nothing.
+        boundary_bits(&[], &[], 1, 1, 0, &mut near, &mut mixed);
+        assert!(mixed.is_empty());
     }
 }
