@@ -169,6 +169,7 @@ impl LightFrame {
 
     /// `X~` of a world point.
     #[must_use]
+    #[inline]
     pub fn homogeneous(&self, world: DVec3) -> DVec3 {
         match *self {
             Self::Perspective { position, rotation } => rotation * (world - position),

@@ -12,7 +12,7 @@ use crate::light::{Light, LightFrame};
 use crate::matrix::{Fallback, LightMatrix, Method, Placement};
 use crate::scene::{Aabb, SceneBounds, ShadowMapSize};
 use crate::tolerance::Tolerances;
-use crate::workspace::{light_bits, with_workspace, CasterKey, SolveWorkspace};
+use crate::workspace::{light_bits, with_workspace, CasterKey, Lent, SolveWorkspace};
 
 /// Sides of the pyramid that stands in for a spot light's cone (it
 /// circumscribes the cone, so it never loses a lit point).
@@ -240,6 +240,12 @@ impl ShadowProblem {
     /// [`Self::prepare_view`], and the view body computed (`ws.view.view_body`).
     fn prepare_view_body(&self, ws: &mut SolveWorkspace) {
         self.prepare_view(ws);
+        self.view_body_in_prepared(ws);
+    }
+
+    /// The view body computed into the camera cache, which was prepared
+    /// for this problem already.
+    fn view_body_in_prepared(&self, ws: &mut SolveWorkspace) {
         if ws.view.view_body.is_none() {
             let mut body = ws.view.spare_body();
             body.set_frustum_corners(&self.camera.frustum_corners_within(&self.bounds.scene()));
@@ -379,7 +385,39 @@ impl ShadowProblem {
     /// [`Self::psm_hull`] into `out`, with `V` from the workspace's camera
     /// cache (and the hull itself when the same light built it last).
     pub(crate) fn psm_hull_into(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
-        self.prepare_view_body(ws);
+        self.prepare_view(ws);
+        self.psm_hull_into_prepared(out, ws);
+    }
+
+    /// [`Self::psm_hull`], where the camera cache was prepared for this
+    /// problem already (inside [`Self::with_visible_receiver_body`], which
+    /// prepares it and lets nothing else touch it before `f` runs: the
+    /// cache's key is not compared again). A hull the cache keeps for this
+    /// light is lent (no copy); give it back with
+    /// [`Self::give_back_psm_hull`].
+    pub(crate) fn lend_psm_hull_prepared(&self, ws: &mut SolveWorkspace) -> PsmHull {
+        self.view_body_in_prepared(ws);
+        let light = light_bits(&self.light);
+        if let Some(lent) = ws.view.lend_psm_hull(&light) {
+            return PsmHull { body: lent.body, lent: Some((light, lent.generation)) };
+        }
+        let mut body = ws.take_body();
+        self.psm_hull_into_prepared(&mut body, ws);
+        PsmHull { body, lent: None }
+    }
+
+    /// Takes back a hull [`Self::lend_psm_hull_prepared`] gave out.
+    pub(crate) fn give_back_psm_hull(&self, hull: PsmHull, ws: &mut SolveWorkspace) {
+        match hull.lent {
+            Some((light, generation)) => ws.view.return_psm_hull(light, Lent::new(hull.body, generation)),
+            None => ws.put_body(hull.body),
+        }
+    }
+
+    /// [`Self::psm_hull_into`] where the camera cache was prepared for this
+    /// problem already.
+    fn psm_hull_into_prepared(&self, out: &mut ConvexPolyhedron, ws: &mut SolveWorkspace) {
+        self.view_body_in_prepared(ws);
         let light = light_bits(&self.light);
         if ws.view.psm_hull.get_into(&light, out) {
             return;
@@ -592,4 +630,12 @@ fn view_planes_into(camera: &Camera, out: &mut Vec<Plane>) {
     out.extend(
         [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].into_iter().filter_map(|h| Plane::from_homogeneous(-h)),
     );
+}
+
+/// PSM's hull for one solve ([`ShadowProblem::lend_psm_hull_prepared`]):
+/// lent by the camera cache (with the light and the key generation it goes
+/// back under) or made in a pooled body.
+pub(crate) struct PsmHull {
+    pub(crate) body: ConvexPolyhedron,
+    lent: Option<([u64; 8], u64)>,
 }

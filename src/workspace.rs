@@ -170,7 +170,13 @@ pub(crate) struct ViewCache {
 /// under.
 pub(crate) struct Lent {
     pub(crate) body: ConvexPolyhedron,
-    generation: u64,
+    pub(crate) generation: u64,
+}
+
+impl Lent {
+    pub(crate) fn new(body: ConvexPolyhedron, generation: u64) -> Self {
+        Self { body, generation }
+    }
 }
 
 /// A body that depends on the camera cache's key and on one light: kept,
@@ -320,6 +326,27 @@ impl ViewCache {
     /// `body`, made under the current key, as if lent by the cache.
     pub(crate) fn lent(&self, body: ConvexPolyhedron) -> Lent {
         Lent { body, generation: self.generation }
+    }
+
+    /// Lends the PSM hull kept for `light` (taken out of the cache, no
+    /// copy), if held.
+    pub(crate) fn lend_psm_hull(&mut self, light: &[u64; 8]) -> Option<Lent> {
+        if !matches!(&self.psm_hull.kept, Some((key, _)) if key == light) {
+            return None;
+        }
+        let generation = self.generation;
+        self.psm_hull.kept.take().map(|(_, body)| Lent { body, generation })
+    }
+
+    /// Takes back a hull [`Self::lend_psm_hull`] lent for `light`; one
+    /// whose key has changed meanwhile, or whose place a newer hull took,
+    /// is kept as spare.
+    pub(crate) fn return_psm_hull(&mut self, light: [u64; 8], lent: Lent) {
+        if lent.generation == self.generation && self.psm_hull.kept.is_none() {
+            self.psm_hull.kept = Some((light, lent.body));
+        } else {
+            self.spare.push(lent.body);
+        }
     }
 
     pub(crate) fn spare_body(&mut self) -> ConvexPolyhedron {

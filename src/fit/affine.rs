@@ -3,7 +3,7 @@
 
 use glam::{DMat2, DMat3, DVec2};
 
-use super::hull::{convex_hull_2d_into, convex_hull_of_polygon_into};
+use super::hull::{convex_hull_of_finite_into, convex_hull_of_polygon_into};
 use super::rect::{bounding_rect_along, min_area_rect, min_area_sheared, Parallelogram};
 
 /// Padding floor relative to the larger extent: a fit is never thinner than
@@ -171,7 +171,8 @@ impl FitWorkspace {
         if polygon {
             convex_hull_of_polygon_into(points, &mut self.sorted, &mut self.hull);
         } else {
-            convex_hull_2d_into(points, &mut self.sorted, &mut self.hull);
+            // Every point is finite (checked above).
+            convex_hull_of_finite_into(points, &mut self.sorted, &mut self.hull);
         }
         let hull = self.hull.as_slice();
         let magnitude = hull.iter().fold(0.0, |max: f64, p| max.max(p.abs().max_element()));

@@ -238,10 +238,26 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
 /// `O(n)` by the Akl–Toussaint heuristic, block by block (on pixel-grid
 /// samples it leaves a few percent). See [`convex_hull_2d`].
 pub fn convex_hull_2d_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
+    hull_into(points, false, scratch, hull);
+}
+
+/// [`convex_hull_2d_into`] of points the caller has found all finite (the
+/// affine fit rejects any other input first): they are copied as they are,
+/// with no test each. The same hull.
+pub(crate) fn convex_hull_of_finite_into(points: &[DVec2], scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
+    debug_assert!(points.iter().all(|p| p.is_finite()));
+    hull_into(points, true, scratch, hull);
+}
+
+fn hull_into(points: &[DVec2], all_finite: bool, scratch: &mut Vec<DVec2>, hull: &mut Vec<DVec2>) {
     scratch.clear();
     // `hull` holds the thinning's block boxes until the chain overwrites it.
     if points.len() <= AKL_TOUSSAINT_MIN_POINTS || !keep_possible_vertices(points, hull, scratch) {
-        scratch.extend(points.iter().copied().filter(|p| p.is_finite()));
+        if all_finite {
+            scratch.extend_from_slice(points);
+        } else {
+            scratch.extend(points.iter().copied().filter(|p| p.is_finite()));
+        }
     }
     scratch.sort_unstable_by(lexicographic);
     scratch.dedup();

@@ -156,17 +156,6 @@ pub(crate) fn bounding_rect_along(points: &[DVec2], dir: DVec2) -> Parallelogram
     bounding_rect_in_frame(points, &frame)
 }
 
-/// Advances the cyclic index `k` while `keep_going(k)` holds, at most
-/// `limit` steps.
-fn advance_while(k: &mut usize, limit: usize, keep_going: impl Fn(usize) -> bool) {
-    for _ in 0..limit {
-        if !keep_going(*k) {
-            break;
-        }
-        *k += 1;
-    }
-}
-
 /// Minimum-area rectangle enclosing a convex polygon.
 ///
 /// `hull` must be a strictly convex polygon in counter-clockwise order, as
@@ -226,7 +215,13 @@ const AREA_TIE: f64 = 1e-9;
 /// rectangle, not whichever rounding favours, so a tiny change of the input
 /// moves the map continuously. Two caliper passes, no allocation.
 fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
-    caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 32])
+    // (A calipers pass visits each edge at most once: a hull of up to 16
+    // vertices fits the smaller array, which is less to clear.)
+    if hull.len() <= 16 {
+        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 16])
+    } else {
+        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 32])
+    }
 }
 
 /// [`caliper_best_edge`] with the first pass's visits kept in `kept` for
@@ -269,31 +264,59 @@ fn caliper_best_edge_keeping(hull: &[DVec2], kept: &mut [(usize, f64, f64)]) -> 
 /// flush-rectangle area, by rotating calipers (`O(h)`).
 fn calipers(hull: &[DVec2], mut visit: impl FnMut(usize, f64, f64)) {
     let n = hull.len();
-    let at = |k: usize| hull[k % n];
-    let step = |k: usize| at(k + 1) - at(k);
+    let next = |r: usize| if r + 1 == n { 0 } else { r + 1 };
+    let step = |c: Cyclic| hull[next(c.r)] - hull[c.r];
 
     // Cyclic vertex indices, never reduced: right-most along the edge,
     // farthest from it, left-most along it. For a CCW polygon they appear in
-    // this order after the edge's end vertex.
-    let (mut right, mut top, mut left) = (0, 0, 0);
+    // this order after the edge's end vertex. Each carries its remainder
+    // modulo `n` along, so no step divides.
+    let start = Cyclic { k: 0, r: 0 };
+    let (mut right, mut top, mut left) = (start, start, start);
     for i in 0..n {
-        let Some(frame) = EdgeFrame::new(at(i), at(i + 1)) else {
+        let Some(frame) = EdgeFrame::new(hull[i], hull[next(i)]) else {
             continue;
         };
         let e = frame.along;
-        right = right.max(i + 1);
-        advance_while(&mut right, n, |k| step(k).dot(e) > 0.0);
-        top = top.max(right);
-        advance_while(&mut top, n, |k| e.perp_dot(step(k)) > 0.0);
-        left = left.max(top);
-        advance_while(&mut left, n, |k| step(k).dot(e) < 0.0);
+        if i + 1 > right.k {
+            right = Cyclic { k: i + 1, r: next(i) };
+        }
+        advance_while(&mut right, n, |c| step(c).dot(e) > 0.0);
+        if right.k > top.k {
+            top = right;
+        }
+        advance_while(&mut top, n, |c| e.perp_dot(step(c)) > 0.0);
+        if top.k > left.k {
+            left = top;
+        }
+        advance_while(&mut left, n, |c| step(c).dot(e) < 0.0);
 
-        let width = (at(right) - at(left)).dot(e);
-        let height = e.perp_dot(at(top) - at(i));
+        let width = (hull[right.r] - hull[left.r]).dot(e);
+        let height = e.perp_dot(hull[top.r] - hull[i]);
         let area = width * height;
         if area.is_finite() {
-            visit(i, area, step(i).length());
+            visit(i, area, (hull[next(i)] - hull[i]).length());
         }
+    }
+}
+
+/// A cyclic index of the calipers: `k` never reduced (its order decides
+/// which pointer is ahead), `r = k % n` (the vertex it names).
+#[derive(Clone, Copy)]
+struct Cyclic {
+    k: usize,
+    r: usize,
+}
+
+/// Advances the cyclic index `c` (over `n` vertices) while `keep_going(c)`
+/// holds, at most `n` steps.
+fn advance_while(c: &mut Cyclic, n: usize, keep_going: impl Fn(Cyclic) -> bool) {
+    for _ in 0..n {
+        if !keep_going(*c) {
+            break;
+        }
+        c.k += 1;
+        c.r = if c.r + 1 == n { 0 } else { c.r + 1 };
     }
 }
 

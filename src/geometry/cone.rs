@@ -69,20 +69,21 @@ pub(crate) fn min_enclosing_cone_in(dirs: &[DVec3], units: &mut Vec<DVec3>) -> O
     let units = units.as_slice();
     let (&first, _) = units.split_first()?;
 
+    // The loops run over the slices before each index (no bounds checks).
     let mut cap = Cap::point(first);
-    for i in 1..units.len() {
-        if cap.contains(units[i]) {
+    for (i, &ui) in units.iter().enumerate().skip(1) {
+        if cap.contains(ui) {
             continue;
         }
-        cap = Cap::point(units[i]);
-        for j in 0..i {
-            if cap.contains(units[j]) {
+        cap = Cap::point(ui);
+        for (j, &uj) in units[..i].iter().enumerate() {
+            if cap.contains(uj) {
                 continue;
             }
-            cap = Cap::through_two(units[i], units[j])?;
-            for k in 0..j {
-                if !cap.contains(units[k]) {
-                    cap = Cap::through_three(units[i], units[j], units[k])?;
+            cap = Cap::through_two(ui, uj)?;
+            for &uk in &units[..j] {
+                if !cap.contains(uk) {
+                    cap = Cap::through_three(ui, uj, uk)?;
                 }
             }
         }
@@ -107,26 +108,32 @@ fn unit(d: DVec3) -> Option<DVec3> {
     (d / d.abs().max_element()).try_normalize()
 }
 
-/// A cap of the unit sphere: the unit vectors within chord distance `chord`
-/// of `axis`.
+/// A cap of the unit sphere: the unit vectors within a chord distance of
+/// `axis` (the farthest of its rim, found when it is made).
 #[derive(Clone, Copy, Debug)]
 struct Cap {
     axis: DVec3,
-    chord: f64,
+    /// `chord + SLACK`, the bound [`Cap::contains`] tests against (summed
+    /// once per cap rather than once per test; the same sum).
+    reach: f64,
 }
 
 impl Cap {
     /// Slack on the chord when testing containment, against rounding.
     const SLACK: f64 = 1e-14;
 
+    fn new(axis: DVec3, chord: f64) -> Cap {
+        Cap { axis, reach: chord + Self::SLACK }
+    }
+
     fn point(u: DVec3) -> Cap {
-        Cap { axis: u, chord: 0.0 }
+        Cap::new(u, 0.0)
     }
 
     /// The cap around `axis` reaching just the farthest of `rim`.
     fn around(axis: DVec3, rim: &[DVec3]) -> Cap {
         let chord = rim.iter().map(|&u| (u - axis).length()).fold(0.0, f64::max);
-        Cap { axis, chord }
+        Cap::new(axis, chord)
     }
 
     /// The smallest cap with `u` and `v` on its rim; `None` when they are
@@ -158,21 +165,68 @@ impl Cap {
     }
 
     fn contains(&self, u: DVec3) -> bool {
-        (u - self.axis).length() <= self.chord + Self::SLACK
+        (u - self.axis).length() <= self.reach
     }
 }
 
-/// Fisher–Yates shuffle driven by SplitMix64 from a fixed seed.
+/// Fisher–Yates shuffle driven by SplitMix64 from a fixed seed. The swaps
+/// depend only on the length: up to [`SWAPS_UP_TO`] items they are read
+/// from a table made at compile time by the same generator ([`swaps`]), so
+/// no 64-bit division is left at run time.
 fn shuffle<T>(items: &mut [T]) {
-    let mut state: u64 = 0x853C_49E6_748F_EA9B;
-    for i in (1..items.len()).rev() {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        items.swap(i, (z % (i as u64 + 1)) as usize);
+    let n = items.len();
+    if let Some(row) = SWAPS.get(n) {
+        for i in (1..n).rev() {
+            items.swap(i, usize::from(row[i]));
+        }
+    } else {
+        shuffle_by_generator(items);
     }
+}
+
+/// The shuffle's generator: SplitMix64 from the fixed seed, one draw per
+/// position from the last down, each reduced modulo the position plus one.
+const fn splitmix_swap(state: &mut u64, i: usize) -> usize {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z % (i as u64 + 1)) as usize
+}
+
+const SEED: u64 = 0x853C_49E6_748F_EA9B;
+
+/// [`shuffle`] without the table (any length).
+fn shuffle_by_generator<T>(items: &mut [T]) {
+    let mut state = SEED;
+    for i in (1..items.len()).rev() {
+        let j = splitmix_swap(&mut state, i);
+        items.swap(i, j);
+    }
+}
+
+/// Longest input whose swaps are tabled.
+const SWAPS_UP_TO: usize = 64;
+
+/// `SWAPS[n][i]`: the index position `i` swaps with when `n` items are
+/// shuffled (`i` from `n - 1` down to 1, as [`shuffle_by_generator`] draws).
+static SWAPS: [[u8; SWAPS_UP_TO]; SWAPS_UP_TO + 1] = swaps();
+
+const fn swaps() -> [[u8; SWAPS_UP_TO]; SWAPS_UP_TO + 1] {
+    let mut table = [[0u8; SWAPS_UP_TO]; SWAPS_UP_TO + 1];
+    let mut n = 2;
+    while n <= SWAPS_UP_TO {
+        let mut state = SEED;
+        let mut i = n - 1;
+        while i >= 1 {
+            // `j <= i < 64`: fits in a byte.
+            table[n][i] = splitmix_swap(&mut state, i) as u8;
+            i -= 1;
+        }
+        n += 1;
+    }
+    table
 }
 
 #[cfg(test)]
@@ -249,6 +303,22 @@ mod tests {
         let cone = min_enclosing_cone(&[DVec3::new(1e300, 1e300, 0.0), DVec3::new(1e-320, 0.0, 0.0)]).unwrap();
         assert!((cone.half_angle() - std::f64::consts::FRAC_PI_8).abs() < 1e-14);
         assert!(!cone.contains(DVec3::ZERO));
+    }
+
+    /// The tabled swaps are the generator's: every length up to the table's
+    /// and one past it give the generator's permutation.
+    #[test]
+    fn tabled_shuffle_equals_the_generator() {
+        for n in 0..=SWAPS_UP_TO + 1 {
+            let mut tabled: Vec<usize> = (0..n).collect();
+            let mut drawn = tabled.clone();
+            shuffle(&mut tabled);
+            shuffle_by_generator(&mut drawn);
+            assert_eq!(tabled, drawn, "{n} items");
+            if n >= 8 {
+                assert_ne!(drawn, (0..n).collect::<Vec<_>>(), "{n} items left in order");
+            }
+        }
     }
 
     #[test]

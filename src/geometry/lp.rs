@@ -27,6 +27,9 @@ const PARALLEL: f64 = 1e-12;
 /// planes); more are recomputed where needed.
 const MAX_RESTRICTED: usize = 48;
 
+/// The stack array's length for the box and up to ten planes (most calls).
+const FEW_RESTRICTED: usize = 16;
+
 /// A point of the box `[min, max]` inside every plane's half-space, all of
 /// them grown by `grow` (`signed_distance <= grow`, the box as much larger),
 /// that maximizes `c·x`, within `tol`; `None` when that region is empty (by
@@ -95,17 +98,31 @@ impl Region<'_> {
         };
         let goal = DVec2::new(c.dot(e1), c.dot(e2));
         let count = 6 + i;
-        let y = if count <= MAX_RESTRICTED {
-            let mut kept = [(DVec2::ZERO, 0.0, 0.0); MAX_RESTRICTED];
-            for (k, slot) in kept[..count].iter_mut().enumerate() {
-                *slot = restricted(k);
-            }
-            maximize_in_square(count, |k| kept[k], half, goal, tol)
+        let y = if count <= FEW_RESTRICTED {
+            maximize_in_square_kept::<FEW_RESTRICTED>(count, restricted, half, goal, tol)
+        } else if count <= MAX_RESTRICTED {
+            maximize_in_square_kept::<MAX_RESTRICTED>(count, restricted, half, goal, tol)
         } else {
             maximize_in_square(count, restricted, half, goal, tol)
         };
         y.map(|y| origin + e1 * y.x + e2 * y.y)
     }
+}
+
+/// [`maximize_in_square`] with the `count <= N` constraints computed once
+/// into an array on the stack (of `N`: a smaller one is less to clear).
+fn maximize_in_square_kept<const N: usize>(
+    count: usize,
+    constraint: impl Fn(usize) -> (DVec2, f64, f64),
+    half: f64,
+    goal: DVec2,
+    tol: f64,
+) -> Option<DVec2> {
+    let mut kept = [(DVec2::ZERO, 0.0, 0.0); N];
+    for (k, slot) in kept[..count].iter_mut().enumerate() {
+        *slot = constraint(k);
+    }
+    maximize_in_square(count, |k| kept[k], half, goal, tol)
 }
 
 /// The largest `goal·y` over the square `|y| <= half` and the half-planes

@@ -28,7 +28,7 @@
 
 use glam::{DMat4, DVec3, DVec4};
 
-use crate::error::Result;
+use crate::error::{LixelError, Result};
 use crate::geometry::{min_enclosing_cone_in, ConvexPolyhedron};
 use crate::light::LightFrame;
 use crate::matrix::{Fallback, LightMatrix, Method};
@@ -132,27 +132,31 @@ fn solve_for(
     if problem.camera().is_orthographic() {
         return super::focused::around(problem, focus, Method::Psm, Some(Fallback::OrthographicCamera), ws);
     }
-    let mut hull = ws.take_body();
-    problem.psm_hull_into(&mut hull, ws);
     let frame = problem.frame_towards(focus);
     // First choice: the whole hull H. If H wraps around the light, PSM's own
     // light frustum does not exist; fit PPS around the visible receivers
     // alone, and failing that use the focused map.
-    let first = attempt(problem, options, frame, &hull, focus, None, ws);
-    ws.put_body(hull);
-    if let Some(matrix) = first {
-        return Ok(matrix);
+    // (Each result is returned as it came, not unwrapped and wrapped again:
+    // a matrix is moved once fewer.) The camera cache was prepared by
+    // `with_visible_receiver_body`.
+    let hull = problem.lend_psm_hull_prepared(ws);
+    let first = attempt(problem, options, frame, &hull.body, focus, None, ws);
+    problem.give_back_psm_hull(hull, ws);
+    if first.is_ok() {
+        return first;
     }
     let fallback = Some(Fallback::PsmHullAroundLight);
-    if let Some(matrix) = attempt(problem, options, frame, focus, focus, fallback, ws) {
-        return Ok(matrix);
+    let second = attempt(problem, options, frame, focus, focus, fallback, ws);
+    if second.is_ok() {
+        return second;
     }
     super::focused::around(problem, focus, Method::Psm, fallback, ws)
 }
 
 /// PSM's map around `region` (with the visible receivers `focus`): its
-/// axis, then the placement; `None` where either fails. `region`'s mappable
-/// vertices are taken once for both.
+/// axis, then the placement; an error where either fails (no axis:
+/// [`LixelError::NotInFront`]). `region`'s mappable vertices are taken once
+/// for both.
 fn attempt(
     problem: &ShadowProblem,
     options: &PsmOptions,
@@ -161,11 +165,13 @@ fn attempt(
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
     ws: &mut SolveWorkspace,
-) -> Option<LightMatrix> {
+) -> Result<LightMatrix> {
     let mut mapped = ws.take_points();
     problem.mappable_vertices_into(region, &mut mapped, ws);
-    let result = psm_axis(problem, options, region, &mapped, &frame, ws)
-        .and_then(|axis| place(problem, frame, axis, region, &mapped, focus, fallback, ws).ok());
+    let result = match psm_axis(problem, options, region, &mapped, &frame, ws) {
+        Some(axis) => place(problem, frame, axis, region, &mapped, focus, fallback, ws),
+        None => Err(LixelError::NotInFront { method: Method::Psm }),
+    };
     ws.put_points(mapped);
     result
 }
