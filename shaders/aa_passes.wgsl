@@ -407,22 +407,33 @@ fn enter_lists(t: u32, r: vec4<i32>, write: bool) {
             }
             let lo = max(r.xy, vec2<i32>(tx, ty) * PER_TILE);
             let hi = min(r.zw, vec2<i32>(tx, ty) * PER_TILE + vec2<i32>(PER_TILE - 1));
-            for (var ly = lo.y; ly <= hi.y; ly++) {
-                for (var lx = lo.x; lx <= hi.x; lx++) {
-                    let list = list_index(vec2<i32>(lx, ly));
-                    if !write {
-                        atomicAdd(&tile_words[count_slot(list)], 1u);
-                        continue;
-                    }
-                    let slot = atomicLoad(&tile_words[offset_slot(list)]) + atomicAdd(&tile_words[cursor_slot(list)], 1u);
-                    // Past the capacity: dropped; the tile's pixels see the
-                    // overflow and keep the standard bit.
-                    if slot < params.capacity {
-                        tile_list[slot] = t;
-                    }
-                }
-            }
+            // The tile's list tiles (at most 2x2: PER_TILE <= 2) written out, not looped:
+            // llvmpipe ends an invocation's loops after 65 535 iterations,
+            // and a triangle over the whole map visits every tile.
+            enter_list(t, lo, hi, vec2<i32>(0, 0), write);
+            enter_list(t, lo, hi, vec2<i32>(1, 0), write);
+            enter_list(t, lo, hi, vec2<i32>(0, 1), write);
+            enter_list(t, lo, hi, vec2<i32>(1, 1), write);
         }
+    }
+}
+
+// List tile `lo + d` of a tile's range [lo, hi] (`enter_lists`), when in it.
+fn enter_list(t: u32, lo: vec2<i32>, hi: vec2<i32>, d: vec2<i32>, write: bool) {
+    let at = lo + d;
+    if any(at > hi) {
+        return;
+    }
+    let list = list_index(at);
+    if !write {
+        atomicAdd(&tile_words[count_slot(list)], 1u);
+        return;
+    }
+    let slot = atomicLoad(&tile_words[offset_slot(list)]) + atomicAdd(&tile_words[cursor_slot(list)], 1u);
+    // Past the capacity: dropped; the tile's pixels see the overflow and
+    // keep the standard bit.
+    if slot < params.capacity {
+        tile_list[slot] = t;
     }
 }
 
@@ -479,15 +490,61 @@ fn tile_count_pass(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     enter_lists(t, triangle_lists(b), false);
 }
 
-// One invocation: the exclusive prefix sum of the tile counts.
-@compute @workgroup_size(1)
-fn tile_scan() {
-    var run = 0u;
-    for (var i = 0u; i < lists_x() * lists_y(); i++) {
-        atomicStore(&tile_words[offset_slot(i)], run);
-        run += atomicLoad(&tile_words[count_slot(i)]);
+// Per invocation of `tile_scan`: the sum of lists [i, i + SCAN_BLOCK) that
+// lie below `end` (`offsets` false), or their offsets from `run` written
+// (true); returns the running sum. Straight-line: llvmpipe ends a shader
+// invocation's loops after 65 535 iterations, all loops together, and a map
+// of 1024² texels has 65 536 lists of 4x4.
+fn scan_block(i: u32, end: u32, run: u32, offsets: bool) -> u32 {
+    var r = scan_one(i, end, run, offsets);
+    r = scan_one(i + 1u, end, r, offsets);
+    r = scan_one(i + 2u, end, r, offsets);
+    r = scan_one(i + 3u, end, r, offsets);
+    r = scan_one(i + 4u, end, r, offsets);
+    r = scan_one(i + 5u, end, r, offsets);
+    r = scan_one(i + 6u, end, r, offsets);
+    return scan_one(i + 7u, end, r, offsets);
+}
+
+fn scan_one(i: u32, end: u32, run: u32, offsets: bool) -> u32 {
+    if i >= end {
+        return run;
     }
-    add_stat(STAT_PAIRS, run);
+    if offsets {
+        atomicStore(&tile_words[offset_slot(i)], run);
+    }
+    return run + atomicLoad(&tile_words[count_slot(i)]);
+}
+
+const SCAN_BLOCK: u32 = 8u;
+var<workgroup> chunk_sums: array<u32, 64>;
+
+// One workgroup of 64: the exclusive prefix sum of the list counts, each
+// invocation over a chunk of the lists (summed, then the chunks' sums
+// scanned in the workgroup, then the offsets written), SCAN_BLOCK lists per
+// loop iteration (`scan_block`).
+@compute @workgroup_size(64)
+fn tile_scan(@builtin(local_invocation_index) lid: u32) {
+    let total = lists_x() * lists_y();
+    let chunk = (total + 63u) / 64u;
+    let first = min(lid * chunk, total);
+    let end = min(first + chunk, total);
+    var sum = 0u;
+    for (var i = first; i < end; i += SCAN_BLOCK) {
+        sum = scan_block(i, end, sum, false);
+    }
+    chunk_sums[lid] = sum;
+    workgroupBarrier();
+    var run = 0u;
+    for (var j = 0u; j < lid; j++) {
+        run += chunk_sums[j];
+    }
+    for (var i = first; i < end; i += SCAN_BLOCK) {
+        run = scan_block(i, end, run, true);
+    }
+    if lid == 63u {
+        add_stat(STAT_PAIRS, run);
+    }
 }
 
 @compute @workgroup_size(64)
@@ -786,26 +843,52 @@ fn face_normal(t_in: vec4<i32>, p: vec2<f32>, point: vec3<f32>, n: vec3<f32>, to
     }
     var best = 0xffffffffu;
     var normal = n;
-    for (var ty = t.y; ty <= t.w; ty++) {
-        for (var tx = t.x; tx <= t.z; tx++) {
-            let list = list_index(vec2<i32>(tx, ty));
-            let start = atomicLoad(&tile_words[offset_slot(list)]);
-            let count = atomicLoad(&tile_words[count_slot(list)]);
-            for (var k = 0u; k < count; k++) {
-                let tri = tile_list[start + k];
-                if tri >= best || !entry_meets(tri, vec2<i32>(tx, ty), p, p) {
-                    continue;
+    // As the exact scan (`visibility_exact`): one flat loop, BLOCK entries
+    // culled per iteration, so that a long list stays within llvmpipe's
+    // loop limit.
+    let span = t.z - t.x + 1;
+    let last_list = span * (t.w - t.y + 1) - 1;
+    var li = 0;
+    var tile = t.xy;
+    var start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
+    var count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
+    var k = 0u;
+    var hits = 0u;
+    var base = 0u;
+    loop {
+        if hits == 0u {
+            if k >= count {
+                if li >= last_list {
+                    break;
                 }
-                let v0 = vertex(tri, 0u) - point;
-                let v1 = vertex(tri, 1u) - point;
-                let v2 = vertex(tri, 2u) - point;
-                let g = cross(v1 - v0, v2 - v0);
-                let scale = length(g);
-                if scale > 0.0 && holds(v0, v1, v2, g, scale, tol) {
-                    best = tri;
-                    normal = g / scale * select(-1.0, 1.0, dot(g, n) >= 0.0);
-                }
+                li += 1;
+                tile = t.xy + vec2<i32>(li % span, li / span);
+                start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
+                count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
+                k = 0u;
+                continue;
             }
+            let m = min(BLOCK, count - k);
+            base = start + k;
+            hits = block_hits(base, m, tile, p, p);
+            k += m;
+            if hits == 0u {
+                continue;
+            }
+        }
+        let tri = tile_list[base + firstTrailingBit(hits)];
+        hits &= hits - 1u;
+        if tri >= best {
+            continue;
+        }
+        let v0 = vertex(tri, 0u) - point;
+        let v1 = vertex(tri, 1u) - point;
+        let v2 = vertex(tri, 2u) - point;
+        let g = cross(v1 - v0, v2 - v0);
+        let scale = length(g);
+        if scale > 0.0 && holds(v0, v1, v2, g, scale, tol) {
+            best = tri;
+            normal = g / scale * select(-1.0, 1.0, dot(g, n) >= 0.0);
         }
     }
     return normal;
@@ -1018,6 +1101,27 @@ fn visibility(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     tile_list[params.queue_base + slot] = id;
 }
 
+// List entries culled per iteration of the exact scan (`block_hits`).
+const BLOCK: u32 = 8u;
+
+// Entry `u` of a block (from index `base` of `tile_list`, `n` entries) as
+// bit `u` when it is in the block and `entry_meets` accepts it.
+fn entry_hit(base: u32, u: u32, n: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) -> u32 {
+    if u >= n {
+        return 0u;
+    }
+    return select(0u, 1u << u, entry_meets(tile_list[base + u], tile, lo, hi));
+}
+
+// The entries of a block of at most BLOCK that `entry_meets` accepts, as
+// bits; written out (no loop) so that the scan's iterations stay few.
+fn block_hits(base: u32, n: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) -> u32 {
+    return entry_hit(base, 0u, n, tile, lo, hi) | entry_hit(base, 1u, n, tile, lo, hi)
+        | entry_hit(base, 2u, n, tile, lo, hi) | entry_hit(base, 3u, n, tile, lo, hi)
+        | entry_hit(base, 4u, n, tile, lo, hi) | entry_hit(base, 5u, n, tile, lo, hi)
+        | entry_hit(base, 6u, n, tile, lo, hi) | entry_hit(base, 7u, n, tile, lo, hi);
+}
+
 // Whether triangle `tri` may hide a sample of pixel `xy` (its top-left
 // corner) from the camera: its screen box meets the pixel grown by a
 // quarter pixel. Its hidden samples are those whose view rays cross it, so
@@ -1083,31 +1187,69 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     var hidden = 0u;
     var tests = 0u;
     var scanned = 0u;
+    // One flat loop over the footprint's list tiles, their entries culled
+    // BLOCK at a time in straight-line code (`block_hits`) and the hits
+    // tested one per iteration. llvmpipe and lavapipe end every loop of an
+    // invocation once 65 535 loop iterations have run in it, all loops
+    // together (gallivm's loop limiter; a nested scan of a wide footprint's
+    // lists reached it and silently skipped the rest): this form takes
+    // about tests + entries / BLOCK + list tiles iterations, and a scan that
+    // still ends before its last list tile without every sample occluded
+    // (cut short by such a limit) leaves the pixel its standard bit,
+    // counted as wide.
     let lists = footprint_lists(fp);
-    for (var ty = lists.y; ty <= lists.w; ty++) {
-        for (var tx = lists.x; tx <= lists.z; tx++) {
-            let list = list_index(vec2<i32>(tx, ty));
-            let start = atomicLoad(&tile_words[offset_slot(list)]);
-            let count = atomicLoad(&tile_words[count_slot(list)]);
-            for (var k = 0u; k < count; k++) {
-                let tri = tile_list[start + k];
-                scanned += 1u;
-                if !entry_meets(tri, vec2<i32>(tx, ty), fp.lo, fp.hi) {
-                    continue;
-                }
-                tests += 1u;
-                let v0 = vertex(tri, 0u) - point;
-                let v1 = vertex(tri, 1u) - point;
-                let v2 = vertex(tri, 2u) - point;
-                occluded |= triangle_mask(v0, v1, v2, facet.cols, l, bias);
-                if (occluded & params.sample_mask) == params.sample_mask {
+    let span = lists.z - lists.x + 1;
+    let last_list = span * (lists.w - lists.y + 1) - 1;
+    var li = 0;
+    var tile = lists.xy;
+    var start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
+    var count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
+    var k = 0u;
+    var hits = 0u;
+    var base = 0u;
+    var full = false;
+    loop {
+        if hits == 0u {
+            if k >= count {
+                if li >= last_list {
                     break;
                 }
-                if params.validity != 0u && on_screen_near(tri, pixel_xy) {
-                    hidden |= triangle_mask(v0, v1, v2, facet.cols, e, bias);
-                }
+                li += 1;
+                tile = lists.xy + vec2<i32>(li % span, li / span);
+                start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
+                count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
+                k = 0u;
+                continue;
+            }
+            let n = min(BLOCK, count - k);
+            base = start + k;
+            hits = block_hits(base, n, tile, fp.lo, fp.hi);
+            k += n;
+            scanned += n;
+            if hits == 0u {
+                continue;
             }
         }
+        let tri = tile_list[base + firstTrailingBit(hits)];
+        hits &= hits - 1u;
+        tests += 1u;
+        let v0 = vertex(tri, 0u) - point;
+        let v1 = vertex(tri, 1u) - point;
+        let v2 = vertex(tri, 2u) - point;
+        occluded |= triangle_mask(v0, v1, v2, facet.cols, l, bias);
+        if (occluded & params.sample_mask) == params.sample_mask {
+            // The block's hits left untested are not counted as read.
+            scanned -= countOneBits(hits);
+            full = true;
+            break;
+        }
+        if params.validity != 0u && on_screen_near(tri, pixel_xy) {
+            hidden |= triangle_mask(v0, v1, v2, facet.cols, e, bias);
+        }
+    }
+    if !full && (li < last_list || k < count || hits != 0u) {
+        add_stat(STAT_WIDE, 1u);
+        return;
     }
     add_stat(STAT_EXACT, 1u);
     add_stat(STAT_TESTS, tests);

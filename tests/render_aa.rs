@@ -11,13 +11,13 @@
 
 mod render_common;
 
-use glam::{DVec2, Vec3};
+use glam::{DVec2, DVec3, Vec3};
 use lixel::experiment::{Coverage, VisibilityError};
-use lixel::mesh::{Mesh, RayCaster, Scene};
+use lixel::mesh::{Mesh, RayCaster, Role, Scene, SceneObject};
 use lixel::render::subpixel::reference::{summed_area, EdgeAdjacency};
 use lixel::render::subpixel::AaSamples;
 use lixel::render::{Frame, Renderer, RendererOptions, ShadowLookup};
-use lixel::{Camera, LightMatrix, Parameterization};
+use lixel::{Camera, Light, LightMatrix, Parameterization};
 use render_common::*;
 
 const AA32: ShadowLookup = ShadowLookup::SubPixelAa(AaSamples::X32);
@@ -101,7 +101,7 @@ fn silhouette_mask_and_summed_area_match_the_cpu_reference() {
 
 /// The pair count (triangle-tile list entries) equals a CPU count: each
 /// triangle's projected bounding box grown by a texel, its list tiles
-/// (8x8 texels, `LIST_TILE` in gpu.rs) whose tile of 8x8 has a
+/// (4x4 texels, `LIST_TILE` in gpu.rs) whose tile of 8x8 has a
 /// neighbourhood (grown by 16 texels) holding a silhouette texel of the
 /// GPU's own mask. f32 against f64 box corners may move a box edge
 /// across a tile border, so within 1%.
@@ -136,7 +136,7 @@ fn pair_count_matches_a_cpu_count() {
         }
         let a = ((lo.x.floor() as i64 - 1).clamp(0, w - 1), (lo.y.floor() as i64 - 1).clamp(0, h - 1));
         let b = ((hi.x.floor() as i64 + 1).clamp(0, w - 1), (hi.y.floor() as i64 + 1).clamp(0, h - 1));
-        const LIST: i64 = 8;
+        const LIST: i64 = 4;
         for ly in a.1 / LIST..=b.1 / LIST {
             for lx in a.0 / LIST..=b.0 / LIST {
                 expected += u64::from(active(lx * LIST / 8, ly * LIST / 8));
@@ -583,4 +583,94 @@ fn a_grazing_floor_is_not_uncertain_by_itself() {
     eprintln!("{facing} pixels facing the light; {stats:?}");
     assert!(facing > 2000, "{facing} pixels facing the light");
     assert!(stats.uncertain_pixels * 20 < facing, "{stats:?} of {facing} facing pixels");
+}
+
+/// llvmpipe and lavapipe end every loop of a shader invocation once 65 535
+/// loop iterations have run in it, all loops together (gallivm's loop
+/// limiter): the exact path's nested scan of a footprint's lists, one
+/// iteration per entry, silently skipped the rest of a long scan (the paper
+/// preset's wide footprints with 4x4 lists, issue-18 note, session 12).
+/// Here 70 000 tiny triangles lie under the floor on the sun's ray through
+/// a shadow-edge pixel's floor point: they occlude nothing the camera sees
+/// and their list tile holds more entries than the limit. Every pixel the
+/// exact path served without them keeps its word, or keeps the standard bit
+/// and is counted as wide (a scan that cannot finish); the old scan changed
+/// words uncounted.
+#[test]
+fn a_list_longer_than_the_loop_limit_keeps_the_words() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let cam = camera(96);
+    let light = test_lights()[0];
+    let m = matrices(&scene, &cam, &[light], 256, &Parameterization::Focused);
+    let frame = Frame { lookup: AA32, ..Frame::new(&cam, &m) };
+    let m = m[0];
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    renderer.render(&frame).unwrap();
+    let plain = renderer.read_occlusion(0).unwrap();
+    let plain_stats = renderer.read_aa_stats(0).unwrap();
+    drop(renderer);
+    let floor_y = scene
+        .objects
+        .iter()
+        .filter(|o| o.role == Role::Receiver)
+        .flat_map(|o| o.mesh.positions.iter())
+        .map(|p| f64::from(p.y))
+        .fold(f64::INFINITY, f64::min);
+    // The lowest partial pixel on the screen whose centre's ray meets the floor.
+    let world_from_screen = cam.screen_from_world().inverse();
+    let floor_point = (0..plain.len())
+        .rev()
+        .filter(|&i| plain[i] != 0 && plain[i] != u32::MAX)
+        .find_map(|i| {
+            let (x, y) = ((i % 96) as f64 + 0.5, (i / 96) as f64 + 0.5);
+            let a = world_from_screen.project_point3(DVec3::new(x, y, 0.0));
+            let b = world_from_screen.project_point3(DVec3::new(x, y, 1.0));
+            let t = (floor_y - a.y) / (b.y - a.y);
+            (t > 0.0 && t < 1.0).then(|| a + (b - a) * t)
+        })
+        .expect("a partial floor pixel");
+    let Light::Directional { direction } = light else { panic!("the sun") };
+    let d = direction.normalize();
+    let centre = floor_point + d * 0.5;
+    let (u, v) = (d.any_orthonormal_pair().0, d.any_orthonormal_pair().1);
+    let texel = |p: DVec3| texel_of(&m, p.as_vec3()).unwrap();
+    // World units per texel across the ray.
+    let per_texel = 1e-3 / (texel(centre + u * 1e-3) - texel(centre)).length();
+    let mut filler = Mesh::default();
+    let mut seed = 12345u64;
+    let mut next = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    const FILLER: usize = 70_000;
+    for _ in 0..FILLER {
+        let c = centre + (u * next() + v * next()) * 0.6 * per_texel + d * next() * 0.1;
+        let base = filler.positions.len() as u32;
+        for corner in [DVec3::ZERO, u * 0.2 * per_texel, v * 0.2 * per_texel] {
+            filler.positions.push((c + corner).as_vec3());
+            filler.normals.push((-d).as_vec3());
+        }
+        filler.indices.extend([base, base + 1, base + 2]);
+    }
+    let mut objects =
+        vec![SceneObject { name: "filler".into(), mesh: filler, role: Role::Receiver, albedo: Vec3::splat(0.5) }];
+    objects.extend(scene.objects.iter().cloned());
+    let filled = Scene { objects };
+    let mut renderer = Renderer::new(&device, &queue, &filled, RendererOptions::default()).unwrap();
+    renderer.render(&frame).unwrap();
+    let words = renderer.read_occlusion(0).unwrap();
+    let stats = renderer.read_aa_stats(0).unwrap();
+    let served = plain.iter().filter(|&&w| w != 0 && w != u32::MAX).count();
+    let differ = (0..plain.len()).filter(|&i| plain[i] != 0 && plain[i] != u32::MAX && words[i] != plain[i]).count();
+    eprintln!("{served} partial pixels, {differ} words differ; plain {plain_stats:?}; filled {stats:?}");
+    assert_eq!(stats.overflow_pixels, 0, "{stats:?}");
+    assert!(
+        differ as u32 <= stats.wide_pixels.saturating_sub(plain_stats.wide_pixels),
+        "{differ} of {served} served words changed, wide {} -> {}",
+        plain_stats.wide_pixels,
+        stats.wide_pixels
+    );
+    // The filler's list was read: more entries than the loop limit.
+    assert!(stats.entries_scanned >= plain_stats.entries_scanned + 65_535, "{stats:?}");
 }

@@ -42,10 +42,14 @@ pub const PAIR_CAPACITY: u32 = 1 << 22;
 const TILE: u32 = 8;
 /// Side of the list tiles in map texels (`LIST_TILE` in the shader): the
 /// triangle lists are kept per list tile, (TILE / LIST_TILE)² per tile.
-/// 8 (one list per tile): with 4 the exact path read half the entries (aa32
-/// CPU −12%) but missed a list row of one wide footprint on the paper preset
-/// on lavapipe (issue-18 note, session 10), cause not found.
-const LIST_TILE: u32 = 8;
+/// With 4 the exact path reads about half the entries of 8 (one list per
+/// tile). Session 10's missed list row with 4 was llvmpipe's loop limit
+/// (65 535 iterations per invocation), which the old one-iteration-per-entry
+/// scan reached on wide footprints with either size; the scans now cull a
+/// block of entries per iteration (issue-18 note, session 12).
+const LIST_TILE: u32 = 4;
+// `enter_lists` in the shader writes a tile's list tiles out, at most 2x2.
+const _: () = assert!(TILE % LIST_TILE == 0 && TILE / LIST_TILE <= 2);
 /// Statistics words per light (`STATS_PER_LIGHT`) and their block.
 const STATS_PER_LIGHT: usize = 8;
 const STATS_WORDS: u64 = 256;
@@ -89,7 +93,10 @@ pub struct AaStats {
     pub exact_pixels: u32,
     /// Pixels that kept the standard bit because a list overflowed.
     pub overflow_pixels: u32,
-    /// Pixels that kept the standard bit because the footprint was too wide.
+    /// Pixels that kept the standard bit because the footprint was too wide,
+    /// or because the exact scan ended before its last list tile without
+    /// every sample occluded (cut short by the backend: llvmpipe and
+    /// lavapipe end a shader invocation's loops after 65 535 iterations).
     pub wide_pixels: u32,
     /// Triangle–facet tests of the exact path, all pixels together (list
     /// entries whose box meets the pixel's footprint; every entry of its
@@ -102,8 +109,8 @@ pub struct AaStats {
     /// compare is uncertain (the map's depth within the bias band of the
     /// receiver's, or a degenerate footprint).
     pub uncertain_pixels: u32,
-    /// List entries the exact path read, all pixels together (the entries
-    /// of the footprints' list tiles, culled or tested, up to a pixel's
+    /// List entries the exact path read, all pixels it served together (the
+    /// entries of the footprints' list tiles, culled or tested, up to a pixel's
     /// early stop; so run-dependent as
     /// [`triangle_tests`](Self::triangle_tests)): the length of the exact
     /// path's scan, a large part of its cost on lavapipe.
