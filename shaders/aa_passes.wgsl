@@ -878,37 +878,23 @@ fn face_normal(t_in: vec4<i32>, p: vec2<f32>, point: vec3<f32>, n: vec3<f32>, to
     // As the exact scan (`visibility_exact`): one flat loop, BLOCK entries
     // culled per iteration, so that a long list stays within llvmpipe's
     // loop limit.
-    let span = t.z - t.x + 1;
-    let last_list = span * (t.w - t.y + 1) - 1;
-    var li = 0;
-    var tile = t.xy;
-    var start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
-    var count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
-    var k = 0u;
+    var scan = list_scan(t);
     var hits = 0u;
-    var base = 0u;
     loop {
         if hits == 0u {
-            if k >= count {
-                if li >= last_list {
-                    break;
-                }
-                li += 1;
-                tile = t.xy + vec2<i32>(li % span, li / span);
-                start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
-                count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
-                k = 0u;
+            let step = list_scan_step(&scan);
+            if step == SCAN_DONE {
+                break;
+            }
+            if step == SCAN_MOVED {
                 continue;
             }
-            let m = min(BLOCK, count - k);
-            base = start + k;
-            hits = block_hits(base, m, tile, p, p);
-            k += m;
+            hits = block_hits(scan.base, scan.n, scan.tile, p, p);
             if hits == 0u {
                 continue;
             }
         }
-        let tri = tile_list[base + firstTrailingBit(hits)];
+        let tri = tile_list[scan.base + firstTrailingBit(hits)];
         hits &= hits - 1u;
         if tri >= best {
             continue;
@@ -1154,6 +1140,64 @@ fn block_hits(base: u32, n: u32, tile: vec2<i32>, lo: vec2<f32>, hi: vec2<f32>) 
         | entry_hit(base, 6u, n, tile, lo, hi) | entry_hit(base, 7u, n, tile, lo, hi);
 }
 
+// A flat walk over the entries of list tiles `lists` (x0, y0, x1, y1, row
+// by row), one step per loop iteration of its caller: a step either moves to
+// the next list tile or hands out the next block of at most BLOCK entries
+// (`base`, `n`) of the current one. The callers cull a block with
+// `block_hits` and test its hits one per iteration, so that a scan takes
+// about tests + entries / BLOCK + list tiles iterations (see
+// `visibility_exact` on llvmpipe's loop limit).
+struct ListScan {
+    origin: vec2<i32>,
+    span: i32,
+    last: i32,
+    li: i32,
+    tile: vec2<i32>,
+    start: u32,
+    count: u32,
+    k: u32,
+    base: u32,
+    n: u32,
+}
+
+fn list_scan(lists: vec4<i32>) -> ListScan {
+    let span = lists.z - lists.x + 1;
+    let tile = lists.xy;
+    let list = list_index(tile);
+    return ListScan(lists.xy, span, span * (lists.w - lists.y + 1) - 1, 0, tile,
+        atomicLoad(&tile_words[offset_slot(list)]), atomicLoad(&tile_words[count_slot(list)]),
+        0u, 0u, 0u);
+}
+
+// What a `list_scan_step` did.
+const SCAN_DONE: u32 = 0u;
+const SCAN_MOVED: u32 = 1u;
+const SCAN_BLOCK_READY: u32 = 2u;
+
+fn list_scan_step(s: ptr<function, ListScan>) -> u32 {
+    if (*s).k >= (*s).count {
+        if (*s).li >= (*s).last {
+            return SCAN_DONE;
+        }
+        (*s).li += 1;
+        (*s).tile = (*s).origin + vec2<i32>((*s).li % (*s).span, (*s).li / (*s).span);
+        let list = list_index((*s).tile);
+        (*s).start = atomicLoad(&tile_words[offset_slot(list)]);
+        (*s).count = atomicLoad(&tile_words[count_slot(list)]);
+        (*s).k = 0u;
+        return SCAN_MOVED;
+    }
+    (*s).n = min(BLOCK, (*s).count - (*s).k);
+    (*s).base = (*s).start + (*s).k;
+    (*s).k += (*s).n;
+    return SCAN_BLOCK_READY;
+}
+
+// Whether the walk ended before its last list tile's last entry.
+fn list_scan_unfinished(s: ListScan) -> bool {
+    return s.li < s.last || s.k < s.count;
+}
+
 // Whether triangle `tri` may hide a sample of pixel `xy` (its top-left
 // corner) from the camera: its screen box meets the pixel grown by a
 // quarter pixel. Its hidden samples are those whose view rays cross it, so
@@ -1229,40 +1273,25 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     // still ends before its last list tile without every sample occluded
     // (cut short by such a limit) leaves the pixel its standard bit,
     // counted as wide.
-    let lists = footprint_lists(fp);
-    let span = lists.z - lists.x + 1;
-    let last_list = span * (lists.w - lists.y + 1) - 1;
-    var li = 0;
-    var tile = lists.xy;
-    var start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
-    var count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
-    var k = 0u;
+    var scan = list_scan(footprint_lists(fp));
     var hits = 0u;
-    var base = 0u;
     var full = false;
     loop {
         if hits == 0u {
-            if k >= count {
-                if li >= last_list {
-                    break;
-                }
-                li += 1;
-                tile = lists.xy + vec2<i32>(li % span, li / span);
-                start = atomicLoad(&tile_words[offset_slot(list_index(tile))]);
-                count = atomicLoad(&tile_words[count_slot(list_index(tile))]);
-                k = 0u;
+            let step = list_scan_step(&scan);
+            if step == SCAN_DONE {
+                break;
+            }
+            if step == SCAN_MOVED {
                 continue;
             }
-            let n = min(BLOCK, count - k);
-            base = start + k;
-            hits = block_hits(base, n, tile, fp.lo, fp.hi);
-            k += n;
-            scanned += n;
+            hits = block_hits(scan.base, scan.n, scan.tile, fp.lo, fp.hi);
+            scanned += scan.n;
             if hits == 0u {
                 continue;
             }
         }
-        let tri = tile_list[base + firstTrailingBit(hits)];
+        let tri = tile_list[scan.base + firstTrailingBit(hits)];
         hits &= hits - 1u;
         tests += 1u;
         let v0 = vertex(tri, 0u) - point;
@@ -1279,7 +1308,7 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
             hidden |= triangle_mask(v0, v1, v2, facet.cols, e, bias);
         }
     }
-    if !full && (li < last_list || k < count || hits != 0u) {
+    if !full && (list_scan_unfinished(scan) || hits != 0u) {
         add_stat(STAT_WIDE, 1u);
         return;
     }

@@ -42,7 +42,10 @@ fn sgsm_fetch(k: vec2<i32>) -> SgsmStored {
     }
     let layer = sgsm_sweep_params.layer;
     let map_size = vec2<f32>(sgsm_sweep_params.size);
-    s.texel = spsm_decode(textureLoad(sgsm_in_texels, k, layer, 0), k, map_size);
+    // The shape only: the sweep reads the pass's f16 slopes, never the
+    // packed gradient (same words; frame time unchanged on lavapipe, issue
+    // 17 note, session 12).
+    s.texel = spsm_decode_shape(textureLoad(sgsm_in_texels, k, layer, 0), k);
     s.kind = s.texel.kind;
     s.slopes = unpack2x16float(textureLoad(sgsm_in_normals, k, layer, 0).x) / map_size;
     return s;

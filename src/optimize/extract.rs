@@ -285,40 +285,98 @@ fn or_row<T: Copy + std::ops::BitOr<Output = T>>(s: &[T], t: &mut [T]) {
     }
 }
 
-/// Each row of `src` (`h` rows of `w` items) ORed with the rows above and
-/// below (clamped at the edges), into `dst`.
-fn or_rows<T: Copy + Default + std::ops::BitOr<Output = T>>(src: &[T], w: usize, h: usize, dst: &mut Vec<T>) {
-    dst.clear();
-    dst.resize(src.len(), T::default());
-    for y in 0..h {
-        let (above, here, below) =
-            (&src[y.saturating_sub(1) * w..][..w], &src[y * w..][..w], &src[(y + 1).min(h - 1) * w..][..w]);
-        for (((cell, &a), &m), &b) in dst[y * w..][..w].iter_mut().zip(above).zip(here).zip(below) {
-            *cell = a | m | b;
-        }
-    }
+/// A row of bits with each bit ORed with its left and right neighbours:
+/// `word` is pixels `64 k ..`, `prev` and `next` the words beside it (zero
+/// past the row's ends, where the clamped neighbour is the pixel itself).
+#[inline(always)]
+fn spread(prev: u64, word: u64, next: u64) -> u64 {
+    word | word << 1 | prev >> 63 | word >> 1 | next << 63
 }
 
-/// [`or_3x3`] of a bit image: `h` rows of `words` `u64`s, pixel `64 k + j`
-/// of a row at bit `j` of its word `k`, `w` pixels a row (the bits beyond
-/// them zero, in `src` and in `dst`).
-fn or_3x3_bits(src: &[u64], w: usize, words: usize, h: usize, tmp: &mut Vec<u64>, dst: &mut Vec<u64>) {
-    tmp.clear();
-    tmp.reserve_exact(src.len());
-    // The last word's pixels (a whole word when `w` is a multiple of 64).
-    let last = u64::MAX >> ((64 - w % 64) % 64);
-    for row in src.chunks_exact(words) {
-        for k in 0..words {
-            let word = row[k];
-            // Left neighbours move up a bit, right ones down; the edges'
-            // clamped neighbour is the pixel itself.
-            let from_left = if k > 0 { row[k - 1] >> 63 } else { 0 };
-            let from_right = if k + 1 < words { row[k + 1] << 63 } else { 0 };
-            let spread = word | word << 1 | from_left | word >> 1 | from_right;
-            tmp.push(if k + 1 == words { spread & last } else { spread });
+/// One light's boundary pixels into `mixed`: the covered pixels with a
+/// shadowed and a lit pixel in their 3x3 neighbourhood (clamped at the
+/// edges). `covered` and `shadowed` are bit images of `h` rows of `words`
+/// words, `w` pixels a row (pixel `64 k + j` of a row at bit `j` of its
+/// word `k`; the bits beyond the row's pixels zero). The 3x3 OR is the OR
+/// across rows of the spread along the row (shifts distribute over OR), so
+/// one pass spreads the shadowed and the lit bits along the rows together,
+/// into `near`, and a second ORs three rows of both and masks them with
+/// `covered`: the same bits as `covered & or_3x3(shadowed) & or_3x3(lit)`,
+/// without their separate passes and buffers, and with no loop per row
+/// where it can be avoided (a light's image at 180x180 has three words a
+/// row, so the per-row work cost more than the words' own).
+fn boundary_bits(
+    covered: &[u64],
+    shadowed: &[u64],
+    w: usize,
+    words: usize,
+    h: usize,
+    near: &mut Vec<[u64; 2]>,
+    mixed: &mut Vec<u64>,
+) {
+    let n = covered.len().min(shadowed.len());
+    near.clear();
+    near.resize(n, [0; 2]);
+    let both = |i: usize| match (covered.get(i), shadowed.get(i)) {
+        (Some(&c), Some(&s)) => [s, c & !s],
+        _ => [0; 2],
+    };
+    if w % 64 != 0 {
+        // Every word spread with the words before and after it in the
+        // buffer, across rows too: a row's pixels end before bit 63 of its
+        // last word, so the row before carries in nothing (its bits beyond
+        // its pixels are clear), and what the row after carries in lands
+        // beyond this row's pixels, where `covered` clears it below.
+        let (mut prev, mut here) = ([0; 2], both(0));
+        for (i, out) in near.iter_mut().enumerate() {
+            let next = both(i + 1);
+            *out = [spread(prev[0], here[0], next[0]), spread(prev[1], here[1], next[1])];
+            (prev, here) = (here, next);
+        }
+    } else {
+        // Whole words a row: the words beyond a row's ends are none.
+        for (y, out) in near.chunks_exact_mut(words).enumerate() {
+            let (mut prev, mut here) = ([0; 2], both(y * words));
+            for (k, out) in out.iter_mut().enumerate() {
+                let next = if k + 1 < words { both(y * words + k + 1) } else { [0; 2] };
+                *out = [spread(prev[0], here[0], next[0]), spread(prev[1], here[1], next[1])];
+                (prev, here) = (here, next);
+            }
         }
     }
-    or_rows(tmp, words, h, dst);
+    mixed.clear();
+    mixed.resize(n, 0);
+    if n == 0 || h == 0 {
+        return;
+    }
+    let or3 = |c: u64, a: &[u64; 2], m: &[u64; 2], b: &[u64; 2]| c & (a[0] | m[0] | b[0]) & (a[1] | m[1] | b[1]);
+    // The rows between the first and the last: the rows above and below
+    // are the words `words` before and after, so the whole stretch is
+    // three shifted slices (no loop per row).
+    if h >= 3 {
+        let inner = words..n - words;
+        for ((((out, &c), a), m), b) in mixed[inner.clone()]
+            .iter_mut()
+            .zip(&covered[inner.clone()])
+            .zip(&near[..n - 2 * words])
+            .zip(&near[inner])
+            .zip(&near[2 * words..])
+        {
+            *out = or3(c, a, m, b);
+        }
+    }
+    // The first and the last row, their missing neighbour clamped to
+    // themselves.
+    for y in [0, h - 1] {
+        let row = |y: usize| &near[y * words..][..words];
+        let (above, here, below) = (row(y.saturating_sub(1)), row(y), row((y + 1).min(h - 1)));
+        let rows = y * words..(y + 1) * words;
+        for ((((out, &c), a), m), b) in
+            mixed[rows.clone()].iter_mut().zip(&covered[rows]).zip(above).zip(here).zip(below)
+        {
+            *out = or3(c, a, m, b);
+        }
+    }
 }
 
 /// Per pixel and light slot `k` (the `k`-th light extracted): shadowed, and
@@ -340,10 +398,9 @@ struct Classes {
     /// One light: boundary pixels (covered, with shadowed and lit pixels in
     /// their 3x3 neighbourhood).
     mixed: Vec<u64>,
-    /// One light: scratch.
-    lit: Vec<u64>,
-    near_lit: Vec<u64>,
-    tmp_bits: Vec<u64>,
+    /// One light: scratch (the shadowed and the lit bits spread along the
+    /// rows, see [`boundary_bits`]).
+    near: Vec<[u64; 2]>,
     /// Several lights: per pixel, shadowed slots (low half) and lit slots
     /// (high half).
     class64: Vec<u64>,
@@ -372,13 +429,7 @@ impl Classes {
                     shadowed.push(s);
                 });
             }
-            self.lit.clear();
-            self.lit.extend(covered.iter().zip(&*shadowed).map(|(&c, &s)| c & !s));
-            or_3x3_bits(shadowed, w, words, h, &mut self.tmp_bits, &mut self.mixed);
-            or_3x3_bits(&self.lit, w, words, h, &mut self.tmp_bits, &mut self.near_lit);
-            for ((m, &l), &c) in self.mixed.iter_mut().zip(&self.near_lit).zip(&*covered) {
-                *m &= l & c;
-            }
+            boundary_bits(covered, shadowed, w, words, h, &mut self.near, &mut self.mixed);
             return;
         }
         self.one = false;
@@ -958,7 +1009,41 @@ pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) ->
 
 #[cfg(test)]
 mod tests {
-    use super::{or_3x3_bits, or_row, or_rows, pack_bytes};
+    use super::{boundary_bits, or_row, pack_bytes};
+
+    /// Each row of `src` (`h` rows of `w` items) ORed with the rows above and
+    /// below (clamped at the edges), into `dst`.
+    fn or_rows<T: Copy + Default + std::ops::BitOr<Output = T>>(src: &[T], w: usize, h: usize, dst: &mut Vec<T>) {
+        dst.clear();
+        dst.resize(src.len(), T::default());
+        for y in 0..h {
+            let (above, here, below) =
+                (&src[y.saturating_sub(1) * w..][..w], &src[y * w..][..w], &src[(y + 1).min(h - 1) * w..][..w]);
+            for (((cell, &a), &m), &b) in dst[y * w..][..w].iter_mut().zip(above).zip(here).zip(below) {
+                *cell = a | m | b;
+            }
+        }
+    }
+
+    /// [`or_3x3`] of a bit image, word by word (the one-light path's
+    /// earlier two passes, the reference for [`boundary_bits`]): `h` rows of
+    /// `words` `u64`s, pixel `64 k + j` of a row at bit `j` of its word `k`,
+    /// `w` pixels a row (the bits beyond them zero, in `src` and in `dst`).
+    fn or_3x3_bits(src: &[u64], w: usize, words: usize, h: usize, tmp: &mut Vec<u64>, dst: &mut Vec<u64>) {
+        tmp.clear();
+        // The last word's pixels (a whole word when `w` is a multiple of 64).
+        let last = u64::MAX >> ((64 - w % 64) % 64);
+        for row in src.chunks_exact(words) {
+            for k in 0..words {
+                let word = row[k];
+                let from_left = if k > 0 { row[k - 1] >> 63 } else { 0 };
+                let from_right = if k + 1 < words { row[k + 1] << 63 } else { 0 };
+                let spread = word | word << 1 | from_left | word >> 1 | from_right;
+                tmp.push(if k + 1 == words { spread & last } else { spread });
+            }
+        }
+        or_rows(tmp, words, h, dst);
+    }
 
     /// The 3x3 OR as the extraction makes it: along rows, then across.
     fn or_3x3<T: Copy + Default + std::ops::BitOr<Output = T>>(
@@ -1068,5 +1153,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The fused one-light pass gives the two 3x3 ORs' bits: covered pixels
+    /// with shadowed and lit pixels nearby, none beyond a row's pixels.
+    #[test]
+    fn boundary_bits_equals_both_or_3x3() {
+        let mut state = 0x51_7cc1_b727_220au64;
+        let (mut tmp, mut near_shadowed, mut near_lit) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut near, mut mixed) = (Vec::new(), Vec::new());
+        let mut nonzero = 0;
+        for w in [1usize, 2, 3, 63, 64, 65, 127, 128, 129, 180, 200] {
+            let words = w.div_ceil(64);
+            let last = u64::MAX >> ((64 - w % 64) % 64);
+            for h in 1..=5 {
+                // Dense and sparse images: runs of covered and shadowed bits.
+                for density in [1u64, 3, 7] {
+                    let mut random = || {
+                        state = crate::test_rng::step(state);
+                        (0..64).fold(0u64, |word, _| {
+                            state = crate::test_rng::step(state);
+                            word << 1 | u64::from(state % 8 < density)
+                        })
+                    };
+                    let mut covered: Vec<u64> = (0..words * h).map(|_| random() | random()).collect();
+                    let mut shadowed: Vec<u64> = covered.iter().map(|&c| c & random()).collect();
+                    for row in 0..h {
+                        covered[row * words + words - 1] &= last;
+                        shadowed[row * words + words - 1] &= last;
+                    }
+                    let lit: Vec<u64> = covered.iter().zip(&shadowed).map(|(&c, &s)| c & !s).collect();
+                    or_3x3_bits(&shadowed, w, words, h, &mut tmp, &mut near_shadowed);
+                    or_3x3_bits(&lit, w, words, h, &mut tmp, &mut near_lit);
+                    let expected: Vec<u64> =
+                        covered.iter().zip(&near_shadowed).zip(&near_lit).map(|((&c, &s), &l)| c & s & l).collect();
+                    boundary_bits(&covered, &shadowed, w, words, h, &mut near, &mut mixed);
+                    assert_eq!(mixed, expected, "{w}x{h} density {density}");
+                    nonzero += usize::from(mixed.iter().any(|&m| m != 0));
+                }
+            }
+        }
+        // Most images have boundary pixels, so the comparison is not of zeros.
+        assert!(nonzero > 100, "{nonzero}");
+        // No rows: nothing.
+        boundary_bits(&[], &[], 1, 1, 0, &mut near, &mut mixed);
+        assert!(mixed.is_empty());
     }
 }
