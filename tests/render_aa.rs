@@ -709,8 +709,8 @@ fn a_triangle_over_too_many_tiles_refuses_the_light() {
     let masks = renderer.read_masks().unwrap();
     eprintln!("{stats:?}");
     assert!(stats.overflow_pixels > 0 && stats.exact_pixels == 0, "{stats:?}");
-    for i in 0..words.len() {
-        let standard = if masks.shadow[i] & 1 != 0 { u32::MAX } else { 0 };
-        assert_eq!(words[i], standard, "pixel {i} keeps the standard bit");
+    for (i, (&word, &shadow)) in words.iter().zip(&masks.shadow).enumerate() {
+        let standard = if shadow & 1 != 0 { u32::MAX } else { 0 };
+        assert_eq!(word, standard, "pixel {i} keeps the standard bit");
     }
 }
