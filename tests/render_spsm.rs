@@ -452,3 +452,65 @@ fn tessellated_cylinder_keeps_its_shadow_edges() {
     assert!(errors[2].0 * 100 < errors[1].0 * 85, "inner edges cut the false light by 15%: {errors:?}");
     assert!(errors[2].1 * 100 < shadowed, "false shadow below 1% of the shadow: {errors:?}");
 }
+
+/// The acne report: SPSM's depth test uses the stored triangle's
+/// plane with a constant bias of 1e-5 of the depth range
+/// ([`SpsmOptions::bias`], no slope-scaled bias), so acne is false shadow on
+/// surfaces the truth calls lit and facing the light. Counted on the tiny
+/// scene (focused 256² maps, sun and point light) for the default lookup,
+/// for the plane test with the constant bias alone (no packing tolerance),
+/// and for the paper's lookup alone (no standard fallback) with the constant
+/// bias alone; "interior" leaves out pixels within one pixel of a shadow
+/// boundary or silhouette in the truth (edge error, not acne).
+#[test]
+fn acne_at_the_constant_bias() {
+    let Some((device, queue)) = gpu() else { return };
+    assert_eq!(SpsmOptions::PAPER.bias, 1e-5, "the issue's constant bias");
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(160);
+    let lights = test_lights();
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 160, 160);
+    let matrices = matrices(&scene, &camera, &lights, 256, &Parameterization::Focused);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let bias_alone = SpsmOptions { packing_tolerance: false, ..SpsmOptions::PAPER };
+    let paper_alone = SpsmOptions { packing_tolerance: false, ..SpsmOptions::SUBPIXEL_ONLY };
+    let lookups = [
+        ("standard (slope-scaled bias)", ShadowLookup::DepthCompare),
+        ("spsm default", SPSM),
+        ("spsm, constant bias alone", ShadowLookup::Spsm(bias_alone)),
+        ("spsm without fallback, constant bias alone", ShadowLookup::Spsm(paper_alone)),
+    ];
+    let lit_facing = |light: u32| {
+        (0..truth.depth.len())
+            .filter(|&i| truth.visible(i) && truth.facing[i] >> light & 1 == 1 && truth.shadow[i] >> light & 1 == 0)
+            .count()
+    };
+    let lit: usize = (0..lights.len() as u32).map(lit_facing).sum();
+    let mut acne = Vec::new();
+    for (name, lookup) in lookups {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &matrices) }).unwrap();
+        let gpu = renderer.read_masks().unwrap();
+        let (mut all, mut interior, mut compared) = (0usize, 0usize, 0u64);
+        for light in 0..lights.len() as u32 {
+            all += (0..truth.depth.len())
+                .filter(|&i| truth.visible(i) && truth.facing[i] >> light & 1 == 1)
+                .filter(|&i| truth.shadow[i] >> light & 1 == 0 && gpu.shadow[i] >> light & 1 == 1)
+                .count();
+            let a = truth.agreement_away_from_boundaries(&gpu, light, 1);
+            interior += a.false_shadow as usize;
+            compared += a.compared;
+        }
+        eprintln!("{name}: false shadow on lit light-facing pixels {all} of {lit}, interior {interior} of {compared} compared");
+        acne.push((all, interior));
+    }
+    // Measured (lavapipe and GL, session 13): standard 101 (interior 0),
+    // SPSM default 5 (0), the constant bias alone 7381 (6298) and without the
+    // fallback 7401 (6312) of 24979 lit light-facing pixels: at 1e-5 alone
+    // the decoded planes' error (16-bit centre depth, 16-bit gradient code,
+    // extrapolated up to a texel and more) exceeds the bias on about a third
+    // of the lit surfaces; the packing tolerance (on by default) removes it.
+    assert!(lit > 10_000, "the scene has lit light-facing pixels: {lit}");
+    assert!(acne[1].1 * 1000 <= lit, "default SPSM: interior acne at most 0.1% of the lit pixels: {acne:?}");
+    assert!(acne[1].0 <= acne[0].0, "default SPSM: no more false shadow on lit surfaces than standard: {acne:?}");
+    assert!(acne[2].0 > acne[1].0, "the packing tolerance is what removes the acne: {acne:?}");
+}
