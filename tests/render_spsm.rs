@@ -514,3 +514,67 @@ fn acne_at_the_constant_bias() {
     assert!(acne[1].0 <= acne[0].0, "default SPSM: no more false shadow on lit surfaces than standard: {acne:?}");
     assert!(acne[2].0 > acne[1].0, "the packing tolerance is what removes the acne: {acne:?}");
 }
+
+/// SPSM works with every light matrix and every light kind (issue 16: "usable
+/// with every `LightMatrix`"): on the tiny scene with a sun, a point light and
+/// a spot light, for the normal, focused, focused-snapped, PSM, LiSPSM and
+/// plane-optimal maps and the scene optimizer settled by a `ShadowLoop` whose
+/// analysis bits come from the SPSM lookup, SPSM's bits agree with the ray
+/// cast away from boundaries (99%, or as well as the standard lookup where
+/// that is lower: PSM), and with each matrix it misclassifies fewer pixels
+/// than the standard lookup. Measured (lavapipe, session 13), standard /
+/// SPSM: normal 874 / 528, focused 466 / 239, focused-snapped 664 / 418,
+/// PSM 2849 / 2088, LiSPSM 501 / 287, plane-optimal 428 / 173, optimized
+/// 404 / 186.
+#[test]
+fn spsm_works_with_every_matrix_and_light_kind() {
+    use lixel::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(160);
+    let lights = [
+        Light::directional(DVec3::new(0.6, -1.0, 0.35)),
+        Light::point(DVec3::new(-8.0, 30.0, 12.0)),
+        Light::spot(DVec3::new(6.0, 25.0, 10.0), DVec3::new(-6.0, -25.0, -10.0), 35f64.to_radians()),
+    ];
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 160, 160);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let mut sets: Vec<(String, Vec<LightMatrix>)> = Parameterization::ALL_DEFAULT
+        .iter()
+        .map(|p| (format!("{:?}", p.method()), matrices(&scene, &camera, &lights, 256, p)))
+        .collect();
+    let view =
+        LoopView { camera: &camera, lights: &lights, bounds: scene.bounds(), map: lixel::ShadowMapSize::square(256) };
+    let options = LoopOptions { lookup: SPSM, ..Default::default() };
+    let settled =
+        ShadowLoop::new(LoopPolicy::Optimized, lights.len(), options).unwrap().settle(&mut renderer, &view, 6).unwrap();
+    sets.push(("Optimized (settled with SPSM)".into(), settled.matrices));
+    let (mut standard_total, mut spsm_total) = (0, 0);
+    for (name, m) in &sets {
+        let (mut counts, mut agreements) = (Vec::new(), Vec::new());
+        for lookup in [ShadowLookup::DepthCompare, SPSM] {
+            renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, m) }).unwrap();
+            let gpu = renderer.read_masks().unwrap();
+            let mut total = 0;
+            for light in 0..lights.len() as u32 {
+                agreements.push(truth.agreement_away_from_boundaries(&gpu, light, 1).fraction());
+                total += gpu.misclassified(&truth, light).unwrap();
+            }
+            counts.push(total);
+        }
+        eprintln!("{name}: misclassified standard {}, spsm {}; agreement away from boundaries per light, standard then spsm {agreements:.4?}", counts[0], counts[1]);
+        // PSM's own standard lookup agrees on only 96.4% (sun) here: SPSM
+        // must reach 99% or the standard lookup's agreement.
+        let (standard, spsm) = agreements.split_at(lights.len());
+        for (light, (a, b)) in standard.iter().zip(spsm).enumerate() {
+            assert!(*b >= a.min(0.99), "{name}, light {light}: spsm {b} against standard {a}");
+        }
+        assert!(counts[1] < counts[0], "{name}: SPSM lowers the error: {counts:?}");
+        standard_total += counts[0];
+        spsm_total += counts[1];
+    }
+    let spot_lit = (0..truth.depth.len()).filter(|&i| truth.visible(i) && truth.facing[i] >> 2 & 1 == 1).count();
+    eprintln!("all matrices: standard {standard_total}, spsm {spsm_total}; spot light reaches {spot_lit} pixels");
+    assert!(spot_lit > 1000, "the spot light reaches the view: {spot_lit}");
+    assert!(spsm_total < standard_total, "SPSM lowers the error over every matrix: {spsm_total} vs {standard_total}");
+}
