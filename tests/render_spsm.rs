@@ -578,3 +578,82 @@ fn spsm_works_with_every_matrix_and_light_kind() {
     assert!(spot_lit > 1000, "the spot light reaches the view: {spot_lit}");
     assert!(spsm_total < standard_total, "SPSM lowers the error over every matrix: {spsm_total} vs {standard_total}");
 }
+
+/// The issue's premise at the scale where it holds: a pole and a fence of
+/// four wires 0.0015 thick (about 0.05 texel of a 256² normal map), seen
+/// close up (a 4° camera looking down on their shadows, a screen pixel about
+/// 0.03 texel), so the ray-cast shadows are a few pixels wide. A standard
+/// map samples texel centres, which such casters almost never cover: it
+/// loses them entirely. SPSM's conservative pass keeps every texel they
+/// touch, and [`SpsmOptions::THIN_CASTERS`] keeps every shadow pixel.
+///
+/// Measured (lavapipe and GL, issue 16 session 13): of 1592 ray-cast shadow
+/// pixels, (found, false shadow) standard (0, 0), SPSM default (`PAPER`)
+/// (0, 0), `THIN_CASTERS` (1592, 23408). So the default lookup loses these
+/// casters as the standard map does (the stored triangle is one of a wire
+/// face's two slivers, p mostly lies in the other, and the hybrid lookup
+/// takes the standard verdict), and the thin-caster rules keep them only at
+/// texel width: the false shadow fills the texel rows the wires cross
+/// (58% of this close-up view). The issue's "SPSM keeps them" holds only in
+/// that coarse sense; not asserted beyond it.
+#[test]
+fn sub_texel_fence_lost_by_the_standard_map() {
+    let Some((device, queue)) = gpu() else { return };
+    let half = 0.00075;
+    let mut casters = Mesh::default();
+    let pole = lixel::mesh::primitives::cuboid(Vec3::new(half, 0.5, half), 12);
+    casters.append(&pole.transformed(&glam::Affine3A::from_translation(Vec3::new(-0.4, 0.5, 0.0))));
+    for (k, z) in [-0.06f32, -0.02, 0.02, 0.06].into_iter().enumerate() {
+        let wire = lixel::mesh::primitives::cuboid(Vec3::new(1.0, half, half), 12);
+        let at = Vec3::new(0.0, 0.6 + 0.2 * k as f32, z);
+        casters.append(&wire.transformed(&glam::Affine3A::from_translation(at)));
+    }
+    let scene = Scene {
+        objects: vec![
+            object("fence", casters, Role::CasterAndReceiver),
+            object("floor", lixel::mesh::primitives::floor(8.0, 2), Role::Receiver),
+        ],
+    };
+    let size = 200;
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 3.0, 0.0),
+        DVec3::ZERO,
+        DVec3::NEG_Z,
+        4f64.to_radians(),
+        UVec2::splat(size),
+        0.5,
+        100.0,
+    )
+    .expect("camera");
+    let lights = [Light::directional(DVec3::new(0.5, -1.0, 0.0))];
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, size, size);
+    let count = |masks: &lixel::mesh::ShadowMasks, truth_bit: u32, bit: u32| {
+        (0..truth.depth.len())
+            .filter(|&i| truth.visible(i) && truth.shadow[i] & 1 == truth_bit && masks.shadow[i] & 1 == bit)
+            .count()
+    };
+    let expected = count(&truth, 1, 1);
+    let m = matrices(&scene, &camera, &lights, 256, &Parameterization::Normal);
+    let texel = {
+        let (a, b) = (texel_of(&m[0], Vec3::ZERO), texel_of(&m[0], Vec3::new(0.0, 0.0, 0.1)));
+        0.1 / (a - b).length()
+    };
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let mut found = Vec::new();
+    for lookup in [ShadowLookup::DepthCompare, SPSM, SPSM_THIN] {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &m) }).unwrap();
+        let masks = renderer.read_masks().unwrap();
+        found.push((count(&masks, 1, 1), count(&masks, 0, 1)));
+    }
+    eprintln!(
+        "texel {texel:.4} units, casters {:.3} texel thick; true shadow pixels {expected}; (found, false shadow) standard {:?}, spsm {:?}, spsm thin casters {:?}",
+        2.0 * half as f64 / texel,
+        found[0],
+        found[1],
+        found[2]
+    );
+    assert!(expected > 500, "the ray cast sees the thin shadows: {expected}");
+    assert!(2.0 * f64::from(half) / texel < 0.1, "the casters are thinner than a tenth of a texel");
+    assert!(found[0].0 * 10 < expected, "the standard map loses (nearly) all of them: {found:?}");
+    assert!(found[2].0 * 10 >= expected * 9, "SPSM with the thin-caster rules keeps at least 90%: {found:?}");
+}
