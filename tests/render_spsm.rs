@@ -41,7 +41,8 @@ fn texel_of(m: &LightMatrix, p: Vec3) -> DVec2 {
 /// Every texel a thin or sliver triangle touches gets a fragment, and no
 /// texel it does not touch (up to 1e-3 texel), for a directional and a
 /// point light; the stored triangles and depths decode to the CPU's within
-/// the packing's precision.
+/// the packing's precision, and the depth buffer holds the CPU's consistent
+/// minimum depth (the plane's minimum over the covered part of the texel).
 #[test]
 fn conservative_coverage_matches_the_cpu_reference() {
     let Some((device, queue)) = gpu() else { return };
@@ -76,6 +77,9 @@ fn conservative_coverage_matches_the_cpu_reference() {
     for (index, (light, m)) in lights.iter().zip(&all).enumerate() {
         let m = *m;
         let texels = renderer.read_map_words(index).unwrap().expect("spsm words");
+        // The depth buffer: the consistent minimum depth, squeezed (spsm_depth_key).
+        let keys = renderer.read_shadow_map(index).unwrap().depth;
+        let mut max_min_depth_error = 0.0f64;
         let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
         let projected: Vec<[DVec2; 3]> =
             shapes.iter().map(|t| [texel_of(&m, t[0]), texel_of(&m, t[1]), texel_of(&m, t[2])]).collect();
@@ -107,6 +111,13 @@ fn conservative_coverage_matches_the_cpu_reference() {
                     // Depth at the texel centre on the shape's plane, from the CPU.
                     let plane = plane_depth(&m, &shapes[k], DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
                     max_depth_error = max_depth_error.max((plane - d.depth).abs());
+                    // The consistent minimum depth: the plane's minimum over the
+                    // part of the texel the triangle covers (paper, section 4).
+                    if let Some(cpu) = min_depth_in_texel(&m, &shapes[k], projected[k], [x, y]) {
+                        let u = 2.0 * f64::from(keys[(y * w + x) as usize]) - 1.0;
+                        let gpu = u / (1.0 - u.abs());
+                        max_min_depth_error = max_min_depth_error.max((gpu - cpu).abs());
+                    }
                     let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
                     let g = DVec2::new(
                         plane_depth(&m, &shapes[k], c + DVec2::X) - plane,
@@ -125,12 +136,48 @@ fn conservative_coverage_matches_the_cpu_reference() {
                 }
             }
         }
-        eprintln!("{light:?}: {checked} touched texels; vertex error {max_vertex_error:.2e} texel, depth error {max_depth_error:.2e}, gradient error {worst_gradient:.2} of the code's bound");
+        eprintln!("{light:?}: {checked} touched texels; vertex error {max_vertex_error:.2e} texel, depth error {max_depth_error:.2e}, gradient error {worst_gradient:.2} of the code's bound, minimum depth error {max_min_depth_error:.2e}");
+        assert!(max_min_depth_error < 2e-5, "consistent minimum depth against the CPU: {max_min_depth_error}");
         assert!(worst_gradient <= 1.0, "the decoded gradient lies within the code's bound: {worst_gradient}");
         assert!(checked > 60, "the shapes touch texels: {checked}");
         assert!(max_vertex_error < 0.02, "f16 vertex offsets: {max_vertex_error}");
         assert!(max_depth_error < 2e-5, "16-bit depth at the centre: {max_depth_error}");
     }
+}
+
+/// The minimum of `tri`'s plane (post-projective depth) over the part of
+/// texel `[x, y]` it covers: the triangle (texel coordinates `t`) clipped to
+/// the texel's box (Sutherland–Hodgman), the plane's minimum at a vertex of
+/// the clipped polygon; `None` when nothing is left.
+fn min_depth_in_texel(m: &LightMatrix, tri: &[Vec3; 3], t: [DVec2; 3], texel: [i64; 2]) -> Option<f64> {
+    let (lo, hi) =
+        (DVec2::new(texel[0] as f64, texel[1] as f64), DVec2::new(texel[0] as f64 + 1.0, texel[1] as f64 + 1.0));
+    let mut poly = t.to_vec();
+    // Keep the side where `inside(p) >= 0`; each box side in turn.
+    let sides: [Box<dyn Fn(DVec2) -> f64>; 4] = [
+        Box::new(move |p| p.x - lo.x),
+        Box::new(move |p| hi.x - p.x),
+        Box::new(move |p| p.y - lo.y),
+        Box::new(move |p| hi.y - p.y),
+    ];
+    for inside in &sides {
+        let mut out = Vec::new();
+        for k in 0..poly.len() {
+            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+            let (da, db) = (inside(a), inside(b));
+            if da >= 0.0 {
+                out.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                out.push(a + (b - a) * (da / (da - db)));
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            return None;
+        }
+    }
+    poly.iter().map(|&p| plane_depth(m, tri, p)).reduce(f64::min)
 }
 
 /// Post-projective depth at texel position `t` on the plane of `tri`.
