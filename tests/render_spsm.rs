@@ -704,3 +704,41 @@ fn sub_texel_fence_lost_by_the_standard_map() {
     assert!(found[0].0 * 10 < expected, "the standard map loses (nearly) all of them: {found:?}");
     assert!(found[2].0 * 10 >= expected * 9, "SPSM with the thin-caster rules keeps at least 90%: {found:?}");
 }
+
+/// `RendererOptions::hardware_conservative`: where the device has
+/// `CONSERVATIVE_RASTERIZATION`, the SPSM maps (texel words and the
+/// consistent minimum depths) and the masks from the rasterizer's
+/// conservative mode equal the shader path's, bit for bit, on the tiny
+/// scene (focused 128² maps, sun and point light). Where the device lacks
+/// the feature (lavapipe, llvmpipe GL) the option is ignored and the test
+/// checks only that (the comparison then holds trivially); it says which.
+#[test]
+fn hardware_conservative_maps_match_the_shader_path() {
+    let Some((device, queue)) = gpu() else { return };
+    let has = device.features().contains(wgpu::Features::CONSERVATIVE_RASTERIZATION);
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(96);
+    let lights = test_lights();
+    let m = matrices(&scene, &camera, &lights, 128, &Parameterization::Focused);
+    let shader = RendererOptions::default();
+    let hardware = RendererOptions { hardware_conservative: true, ..RendererOptions::default() };
+    let mut results = Vec::new();
+    for options in [shader, hardware] {
+        let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+        renderer.render(&Frame { masks: true, lookup: SPSM, ..Frame::new(&camera, &m) }).unwrap();
+        let words: Vec<_> =
+            (0..lights.len()).map(|l| renderer.read_map_words(l).unwrap().expect("spsm words")).collect();
+        let depths: Vec<_> = (0..lights.len()).map(|l| renderer.read_shadow_map(l).unwrap().depth).collect();
+        results.push((renderer.hardware_conservative(), words, depths, renderer.read_masks().unwrap()));
+    }
+    eprintln!("device has CONSERVATIVE_RASTERIZATION: {has}; renderers use it: {} / {}", results[0].0, results[1].0);
+    assert!(!results[0].0, "off by default");
+    assert_eq!(results[1].0, has, "used exactly where the device has it");
+    for light in 0..lights.len() {
+        let differ = results[0].1[light].iter().zip(&results[1].1[light]).filter(|(a, b)| a != b).count();
+        let depth_differ = results[0].2[light].iter().zip(&results[1].2[light]).filter(|(a, b)| a != b).count();
+        eprintln!("light {light}: {differ} texel words and {depth_differ} depths differ");
+        assert_eq!((differ, depth_differ), (0, 0), "light {light}: hardware and shader maps differ");
+    }
+    assert!(results[0].3 == results[1].3, "the masks differ");
+}
