@@ -135,3 +135,44 @@ fn cached_solves_are_bit_identical_to_uncached() {
     eprintln!("{compared} solves compared, {errors} of them errors");
     assert!(compared > cases * 120, "too few solves compared: {compared}");
 }
+
+/// PSM's axis, kept in the camera cache with its hull, is found again only
+/// for the same near-plane option and tolerances: one workspace solving a
+/// still light and camera with the options and tolerances alternating gives
+/// every uncached result (and the alternatives do differ, so a stale axis
+/// would show).
+#[test]
+fn psm_axis_kept_per_option_and_tolerance() {
+    use lixel::{PsmOptions, Tolerances};
+    let cases = (common::cases() / 20).max(40);
+    let (mut compared, mut differing) = (0, 0);
+    for i in 0..cases {
+        let config = if i % 2 == 0 { common::config(1516, i) } else { common::hard_config(1516, i).0 };
+        let Some(problem) = config.problem() else { continue };
+        let narrow = Tolerances { min_front_cosine: 0.97, ..*problem.tolerances() };
+        let coarse = Tolerances { coarse_eps: 0.05, min_relative_span: 0.5, ..*problem.tolerances() };
+        let near = problem.camera().z_near();
+        let variants = [problem.clone(), problem.clone().with_tolerances(narrow), problem.with_tolerances(coarse)];
+        let options = [PsmOptions::DEFAULT, PsmOptions { min_view_depth: Some(near * 3.0) }];
+        let mut own = SolveWorkspace::new();
+        let mut first: Option<String> = None;
+        for _ in 0..3 {
+            for variant in &variants {
+                for &option in &options {
+                    let parameterization = Parameterization::Psm(option);
+                    let uncached = bits(&variant.solve_with(&parameterization, &mut SolveWorkspace::uncached()));
+                    for _ in 0..2 {
+                        assert_eq!(bits(&variant.solve_with(&parameterization, &mut own)), uncached, "case {i}");
+                        compared += 1;
+                    }
+                    match &first {
+                        Some(f) => differing += usize::from(*f != uncached),
+                        None => first = Some(uncached),
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{compared} PSM solves compared, {differing} alternatives differing from the first");
+    assert!(compared > cases * 20 && differing > cases * 5, "{compared} compared, {differing} differing");
+}
