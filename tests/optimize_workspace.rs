@@ -179,8 +179,8 @@ fn psm_axis_kept_per_option_and_tolerance() {
         };
         let default = uncached(0, 0);
         differing[0] += usize::from(uncached(0, 1) != default);
-        for v in 1..variants.len() {
-            differing[v] += usize::from(uncached(v, 0) != default);
+        for (v, count) in differing.iter_mut().enumerate().skip(1) {
+            *count += usize::from(uncached(v, 0) != default);
         }
         // Each alternative right after the default, differing from it in
         // one key field only: a key missing that field hits a stale axis.
