@@ -1213,6 +1213,68 @@ fn on_screen_near(tri: u32, xy: vec2<f32>) -> bool {
     return all(b.xy <= xy + vec2<f32>(1.25)) && all(b.zw >= xy - vec2<f32>(0.25));
 }
 
+// Sub-sample `s`'s position in the pixel (SAMPLE_POSITIONS in
+// subpixel/mod.rs: cell centres of an 8x8 grid with i + j odd, nested: the
+// 8 cells with i + j = 3 (mod 8) by row, then the 8 with 7 (mod 8) by row,
+// then the 16 with 1 (mod 4), two per row, left first).
+fn sample_position(s: u32) -> vec2<f32> {
+    var i: u32;
+    var j: u32;
+    if s < 8u {
+        j = s;
+        i = (3u + 8u - j) & 7u;
+    } else if s < 16u {
+        j = s - 8u;
+        i = (7u + 8u - j) & 7u;
+    } else {
+        j = (s - 16u) >> 1u;
+        let a = (1u + 8u - j) & 7u;
+        let b = (5u + 8u - j) & 7u;
+        i = select(max(a, b), min(a, b), (s & 1u) == 0u);
+    }
+    return (vec2<f32>(f32(i), f32(j)) + 0.5) / 8.0;
+}
+
+// Whether facet point `s` (pixel-local) of a pixel lies inside a spot
+// light's cone (`in_cone`, from the light's position without the facet
+// frame's round trip through world coordinates).
+fn facet_in_cone(cols: array<vec4<f32>, 3>, point: vec3<f32>, light: Light, s: vec2<f32>) -> bool {
+    let x = cols[0] * s.x + cols[1] * s.y + cols[2];
+    let to_world = (point - light.position.xyz) + x.xyz / x.w;
+    return dot(light.spot.xyz, to_world) >= light.spot.w * length(to_world);
+}
+
+// The samples (of `params.sample_mask`) whose facet points a spot light's
+// cone holds; every sample for other lights. Outside the cone a surface is
+// unlit, not shadowed: the coverage truth leaves such samples out of its
+// valid ones, as the standard lookup leaves a pixel whose centre lies
+// outside out of the facing bits. The cone (half-angle below 90 degrees)
+// and the facet (the image of the unit square) are convex, so when the
+// facet's four corners lie inside, every sample does: only pixels at the
+// cone's edge test their samples, in a loop of at most 32 iterations that
+// runs before the scan (the loop limiter, see `visibility_exact`, cannot
+// end it unseen: the scan after it would be cut short too and counted).
+fn cone_samples(cols: array<vec4<f32>, 3>, point: vec3<f32>, light: Light) -> u32 {
+    if light.spot.w < -1.0 {
+        return params.sample_mask;
+    }
+    let corners = u32(facet_in_cone(cols, point, light, vec2<f32>(0.0, 0.0)))
+        + u32(facet_in_cone(cols, point, light, vec2<f32>(1.0, 0.0)))
+        + u32(facet_in_cone(cols, point, light, vec2<f32>(0.0, 1.0)))
+        + u32(facet_in_cone(cols, point, light, vec2<f32>(1.0, 1.0)));
+    if corners == 4u {
+        return params.sample_mask;
+    }
+    var word = 0u;
+    for (var s = 0u; s < 32u; s++) {
+        let bit = 1u << s;
+        if (params.sample_mask & bit) != 0u && facet_in_cone(cols, point, light, sample_position(s)) {
+            word |= bit;
+        }
+    }
+    return word;
+}
+
 // The exact path, one invocation per queued pixel (an indirect dispatch
 // sized by `exact_args` in gpu.rs; the last workgroup's invocations past
 // the queue's length return at once).
@@ -1258,6 +1320,8 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     // The eye in the facet's frame: a triangle between it and the facet
     // hides the samples behind it (the paper's validity mask).
     let e = vec4<f32>(eye, 1.0);
+    // A spot light's cone, per sample (before the scan's loop).
+    let cone = cone_samples(facet.cols, point, light);
     let pixel_xy = vec2<f32>(f32(id % params.width), f32(id / params.width));
     var occluded = 0u;
     var hidden = 0u;
@@ -1318,11 +1382,18 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     let pixels = params.width * params.height;
     let out = params.light * pixels + id;
     occlusion[out] = occluded & params.sample_mask;
+    // Samples outside a spot light's cone are never valid (`cone_samples`).
     // Every sample occluded: visibility 0 whatever is valid (and the walk
-    // stopped early, in the lists' atomic order): all valid. Every sample
-    // hidden: no facet sample to trust; all valid (the occlusion as is).
-    var valid = ~hidden & params.sample_mask;
+    // stopped early, in the lists' atomic order): all valid (in the cone).
+    // Every sample hidden: no facet sample to trust; all valid (in the
+    // cone; the occlusion as is). No sample in the cone (the pixel's centre
+    // is, so only sampling misses the cone): all valid.
+    let in_cone_mask = cone & params.sample_mask;
+    var valid = ~hidden & in_cone_mask;
     if (occluded & params.sample_mask) == params.sample_mask || valid == 0u {
+        valid = in_cone_mask;
+    }
+    if valid == 0u {
         valid = params.sample_mask;
     }
     occlusion[params.valid_base + out] = valid;

@@ -120,9 +120,28 @@ impl Coverage {
 /// leaves out samples whose facet point another surface hides from the
 /// camera, and may end below it). Bit `s` set: occluded;
 /// pixels not counted, or whose plane is seen edge-on (no facet), hold the
-/// centre's shadow bit in every bit.
+/// centre's shadow bit in every bit. For a spot light, samples whose facet
+/// point lies outside the cone are not lit, not shadowed: use
+/// [`facet_reference_words`], whose validity words leave them out as the
+/// truth does.
 #[must_use]
 pub fn facet_reference(caster: &RayCaster, camera: &Camera, light: &Light, truth: &ShadowMasks) -> Vec<u32> {
+    facet_reference_words(caster, camera, light, truth).0
+}
+
+/// [`facet_reference`]'s occlusion words and validity words: bit `s` of a
+/// validity word set when the light reaches facet point `s` apart from
+/// occluders, i.e. it lies inside a spot light's cone (as in [`Coverage`]
+/// and the antialiased lookup's validity words); every bit for other
+/// lights, for pixels without a facet, and for a facet with no sample
+/// inside. Score them with [`VisibilityError::of_valid_occlusion`].
+#[must_use]
+pub fn facet_reference_words(
+    caster: &RayCaster,
+    camera: &Camera,
+    light: &Light,
+    truth: &ShadowMasks,
+) -> (Vec<u32>, Vec<u32>) {
     let (width, height) = (truth.width, truth.height);
     let clip_from_world = camera.clip_from_world();
     let world_from_clip = clip_from_world.inverse();
@@ -132,7 +151,7 @@ pub fn facet_reference(caster: &RayCaster, camera: &Camera, light: &Light, truth
         .map(|i| {
             let centre_bit = if truth.shadow[i] & 1 != 0 { u32::MAX } else { 0 };
             if !counted(truth, i) {
-                return centre_bit;
+                return (centre_bit, u32::MAX);
             }
             let pixel = glam::UVec2::new(i as u32 % width, i as u32 / width);
             let p = pixel.as_dvec2() + DVec2::splat(0.5);
@@ -140,21 +159,25 @@ pub fn facet_reference(caster: &RayCaster, camera: &Camera, light: &Light, truth
             let near = world_from_clip.project_point3(ndc.extend(0.0));
             let far = world_from_clip.project_point3(ndc.extend(1.0));
             let ray = Ray { origin: near.as_vec3(), direction: (far - near).as_vec3() };
-            let Some(hit) = caster.bvh().closest_hit(&ray, 1.0) else { return centre_bit };
+            let Some(hit) = caster.bvh().closest_hit(&ray, 1.0) else { return (centre_bit, u32::MAX) };
             let point = near + (far - near) * f64::from(hit.t);
             let (_, geometric) = caster.normals_at(&hit);
             let Some(facet) = Facet::new(&clip_from_world, viewport, pixel, point, geometric.as_dvec3()) else {
-                return centre_bit;
+                return (centre_bit, u32::MAX);
             };
-            let mut occluded = 0u32;
+            let (mut occluded, mut valid) = (0u32, 0u32);
             for (s, offset) in SAMPLE_POSITIONS.iter().enumerate() {
-                if caster.in_shadow(facet.world_at(*offset).as_vec3(), geometric, light) {
+                let world = facet.world_at(*offset);
+                if caster.in_shadow(world.as_vec3(), geometric, light) {
                     occluded |= 1 << s;
                 }
+                if light.reaches(world) {
+                    valid |= 1 << s;
+                }
             }
-            occluded
+            (occluded, if valid == 0 { u32::MAX } else { valid })
         })
-        .collect()
+        .unzip()
 }
 
 /// The summed absolute visibility error of a method over the counted pixels.
@@ -362,6 +385,40 @@ mod tests {
             assert_eq!(e.pixels, u64::from(size * size));
             assert!(binary.sum > 1.0, "the edge is fractional: {binary:?}");
             assert!(e.sum <= 1e-9, "{samples:?}: {e:?}");
+        }
+    }
+
+    #[test]
+    fn facets_leave_samples_outside_a_spots_cone_out() {
+        // A spot above the floor whose cone edge (a circle of radius 1.5
+        // around (0, -1) on the floor) crosses the shadow's edge in view:
+        // samples of the pixels there lie outside the cone, where the truth
+        // counts them neither lit nor shadowed. The facet reference's
+        // validity words leave out the same samples (on a flat receiver the
+        // facet is the receiver), so its error is 0; with every sample
+        // valid it is not.
+        let size = 64u32;
+        let scene = half_plane_scene(0.013);
+        let caster = RayCaster::new(&scene);
+        let camera = top_camera(size);
+        let light = Light::spot(DVec3::new(0.0, 10.0, -1.0), DVec3::NEG_Y, 0.15f64.atan());
+        let truth = caster.trace_masks(&camera, &[light], size, size);
+        let coverage = Coverage::trace(&caster, &camera, &light, &truth);
+        let (occluded, valid) = facet_reference_words(&caster, &camera, &light, &truth);
+        assert_eq!(occluded, facet_reference(&caster, &camera, &light, &truth));
+        let mut edge = 0;
+        for i in 0..valid.len() {
+            if coverage.valid[i] != 0 {
+                assert_eq!(valid[i], coverage.valid[i], "pixel {i}");
+                edge += usize::from(valid[i] != u32::MAX);
+            }
+        }
+        assert!(edge > 20, "{edge} pixels on the cone's edge");
+        for samples in AaSamples::ALL {
+            let e = VisibilityError::of_valid_occlusion(&occluded, &valid, &truth, &coverage, samples);
+            let all_valid = VisibilityError::of_occlusion(&occluded, &truth, &coverage, samples);
+            assert!(e.sum <= 1e-9, "{samples:?}: {e:?}");
+            assert!(all_valid.sum > 0.1, "{samples:?}: {all_valid:?}");
         }
     }
 

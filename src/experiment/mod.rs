@@ -46,7 +46,7 @@ use crate::render::{LoopError, RenderError};
 use crate::{Camera, Light, LixelError};
 
 pub use cascades::{check_cascades, fold_cascade_masks, large_scene};
-pub use coverage::{facet_reference, Coverage, VisibilityError};
+pub use coverage::{facet_reference, facet_reference_words, Coverage, VisibilityError};
 pub use identity::{Identity, RESULT_NEUTRAL_SETTINGS};
 pub use images::error_overlay;
 pub use merge::{merge, MergeOptions};
