@@ -435,7 +435,7 @@ fn boundary_bits(
         (Some(&c), Some(&s)) => [s, c & !s],
         _ => [0; 2],
     };
-    if w % 64 != 0 {
+    if !w.is_multiple_of(64) {
         // Every word spread with the words before and after it in the
         // buffer, across rows too: a row's pixels end before bit 63 of its
         // last word, so the row before carries in nothing (its bits beyond
@@ -1295,7 +1295,7 @@ mod tests {
                 let src: Vec<u64> = (0..w * h)
                     .map(|_| {
                         state = crate::test_rng::step(state);
-                        if state % 4 == 0 {
+                        if state.is_multiple_of(4) {
                             1 << (state >> 58)
                         } else {
                             0
@@ -1324,7 +1324,7 @@ mod tests {
                 let pixels: Vec<u64> = (0..w * h)
                     .map(|_| {
                         state = crate::test_rng::step(state);
-                        u64::from(state % 5 == 0)
+                        u64::from(state.is_multiple_of(5))
                     })
                     .collect();
                 let mut packed = vec![0u64; words * h];
