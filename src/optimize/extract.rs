@@ -696,10 +696,16 @@ pub(super) fn extract(
                     active &= active - 1;
                     let x = 64 * k + j as usize;
                     let (sx, column) = columns[x];
-                    let (s, b) = ((shadow >> j) as u32 & 1, (mixed >> j) as u32 & 1);
+                    // Active: shadowed, or at a boundary (then also relevant).
+                    let boundary = mixed >> j & 1 != 0;
                     let mut surface = None;
-                    let point = work.point_at((x, y), (sx, sy), row, column, b != 0, |found| surface = found);
-                    work.emit(all, 0, point, surface.as_ref(), s, b);
+                    let point = work.point_at((x, y), (sx, sy), row, column, boundary, |found| surface = found);
+                    let samples = &mut all[0];
+                    match point {
+                        None => samples.counts.rejected_invalid += 1,
+                        Some((here, world)) if boundary => work.boundary(samples, 0, here, world, surface.as_ref()),
+                        Some((here, world)) => work.relevant(samples, 0, here, world),
+                    }
                 }
             }
         }
@@ -902,7 +908,6 @@ impl PixelWork<'_> {
         shadowed_bits: u32,
         mixed_bits: u32,
     ) {
-        let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
         let Some((here, world)) = point else {
             for bit in set_bits(shadowed_bits | mixed_bits) {
                 all[bit - first].counts.rejected_invalid += 1;
@@ -912,38 +917,55 @@ impl PixelWork<'_> {
         // Each slot's lists are its own, so the slots without a boundary
         // here (only relevant samples) go first, in a loop of their own.
         for bit in set_bits(shadowed_bits & !mixed_bits) {
-            let samples = &mut all[bit - first];
-            samples.relevant.push(to_light(&self.rows[bit], here));
-            samples.relevant_world.push(world);
+            self.relevant(&mut all[bit - first], bit, here, world);
         }
         for bit in set_bits(mixed_bits) {
-            let samples = &mut all[bit - first];
-            let rows = &self.rows[bit];
-            let x_light = to_light(rows, here);
-            samples.relevant.push(x_light);
-            samples.relevant_world.push(world);
-            samples.counts.boundary_candidates += 1;
-            let Some(&found) = surface else {
-                samples.counts.rejected_discontinuity += 1;
-                continue;
-            };
-            let sample = match found {
-                Surface::Given { tx, ty, .. } => {
-                    let along = |t: DVec3| to_light(rows, t.extend(0.0));
-                    BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
-                }
-                Surface::Depth { dx4, dy4, .. } => {
-                    BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
-                }
-            };
-            if !faces_light(samples.problem.light(), world, found.normal(), self.options.min_light_cosine) {
-                samples.counts.rejected_back_facing += 1;
-                continue;
-            }
-            samples.boundary.push(sample);
-            samples.boundary_world.push(world);
+            self.boundary(&mut all[bit - first], bit, here, world, surface);
         }
     }
+
+    /// Slot `slot`'s relevant sample at a pixel where it has no boundary.
+    #[inline(always)]
+    fn relevant(&self, samples: &mut Samples, slot: usize, here: DVec4, world: DVec3) {
+        samples.relevant.push(to_light(&self.rows[slot], here));
+        samples.relevant_world.push(world);
+    }
+
+    /// Slot `slot`'s relevant sample and boundary candidate at a pixel where
+    /// it has a boundary.
+    #[inline(always)]
+    fn boundary(&self, samples: &mut Samples, slot: usize, here: DVec4, world: DVec3, surface: Option<&Surface>) {
+        let rows = &self.rows[slot];
+        let x_light = to_light(rows, here);
+        samples.relevant.push(x_light);
+        samples.relevant_world.push(world);
+        samples.counts.boundary_candidates += 1;
+        let Some(&found) = surface else {
+            samples.counts.rejected_discontinuity += 1;
+            return;
+        };
+        let sample = match found {
+            Surface::Given { tx, ty, .. } => {
+                let along = |t: DVec3| to_light(rows, t.extend(0.0));
+                BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+            }
+            Surface::Depth { dx4, dy4, .. } => {
+                BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
+            }
+        };
+        if !faces_light(samples.problem.light(), world, found.normal(), self.options.min_light_cosine) {
+            samples.counts.rejected_back_facing += 1;
+            return;
+        }
+        samples.boundary.push(sample);
+        samples.boundary_world.push(world);
+    }
+}
+
+/// A light's `X~ = T [x; w]` from its rows.
+#[inline(always)]
+fn to_light(rows: &[DVec4; 3], x: DVec4) -> DVec3 {
+    DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x))
 }
 
 /// A pixel active for some light, with its world point (its surface, where
