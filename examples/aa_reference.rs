@@ -7,7 +7,8 @@
 //! * `alias-free`: the exact centre-sample truth (the best any binary
 //!   lookup can do),
 //! * `facet-N`: the paper's facet approximation with every blocker found
-//!   and no table rounding (`experiment::facet_reference`), N sub-samples:
+//!   and no table rounding (`experiment::facet_reference_words`; a spot
+//!   light's samples outside its cone are not counted), N sub-samples:
 //!   the floor under a GPU `+aaN` lookup,
 //!
 //! and the time the coverage truth and the facet reference took.
@@ -71,7 +72,7 @@ fn run() -> Result<(), String> {
         let coverage = Coverage::trace(&caster, runner.camera(), &light, &truth);
         let t_coverage = start.elapsed().as_secs_f64();
         let start = Instant::now();
-        let facets = experiment::facet_reference(&caster, runner.camera(), &light, &truth);
+        let (facets, in_cone) = experiment::facet_reference_words(&caster, runner.camera(), &light, &truth);
         let t_facet = start.elapsed().as_secs_f64();
         let focused = runner
             .problem(light, config.map)
@@ -81,9 +82,9 @@ fn run() -> Result<(), String> {
         let errors = [
             VisibilityError::of_masks(&masks, &truth, &coverage, AaSamples::X32),
             VisibilityError::of_masks(&truth, &truth, &coverage, AaSamples::X32),
-            VisibilityError::of_occlusion(&facets, &truth, &coverage, AaSamples::X8),
-            VisibilityError::of_occlusion(&facets, &truth, &coverage, AaSamples::X16),
-            VisibilityError::of_occlusion(&facets, &truth, &coverage, AaSamples::X32),
+            VisibilityError::of_valid_occlusion(&facets, &in_cone, &truth, &coverage, AaSamples::X8),
+            VisibilityError::of_valid_occlusion(&facets, &in_cone, &truth, &coverage, AaSamples::X16),
+            VisibilityError::of_valid_occlusion(&facets, &in_cone, &truth, &coverage, AaSamples::X32),
         ];
         for (t, e) in totals.iter_mut().zip(&errors) {
             t.sum += e.sum;
