@@ -94,7 +94,7 @@ struct AaParams {
     // occlusion words).
     valid_base: u32,
     // 1: the validity mask on (the default); 0: every sample valid (for
-    // tests).
+    // tests; a spot light's samples outside its cone stay invalid).
     validity: u32,
     // 1: pixels whose depth compare is uncertain take the exact path (the
     // default); 0: only silhouette pixels do (for tests).

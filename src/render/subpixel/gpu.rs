@@ -649,10 +649,13 @@ impl Renderer {
     /// one per camera pixel as [`read_occlusion`](Self::read_occlusion)'s:
     /// bit `s` set when sub-sample `s`'s facet point is seen by the camera,
     /// i.e. no triangle of the pixel's lists lies between them (the paper's
-    /// validity mask). The pixel's visibility is the share of valid samples
+    /// validity mask) and, for a spot light, the facet point lies inside
+    /// the cone (outside it a surface is unlit, not shadowed, as in the
+    /// coverage truth). The pixel's visibility is the share of valid samples
     /// not occluded ([`bitmask::visibility_of_valid`](super::bitmask::visibility_of_valid)).
-    /// Every pattern bit is set off the exact path, where every sample is
-    /// occluded, and where none would be valid. Blocks until done.
+    /// Every pattern bit is set off the exact path and where none would be
+    /// valid; where every sample is occluded, every bit in a spot's cone.
+    /// Blocks until done.
     ///
     /// # Errors
     /// As [`read_occlusion`](Self::read_occlusion).
@@ -814,7 +817,8 @@ impl Renderer {
 
     /// Turns the validity mask of the antialiased lookup on (the default)
     /// or off (every sample valid: the facet's plane answers for the whole
-    /// pixel), for comparisons.
+    /// pixel; a spot light's samples outside its cone stay invalid), for
+    /// comparisons.
     ///
     /// # Errors
     /// As [`set_aa_footprint_culling`](Self::set_aa_footprint_culling).
