@@ -198,6 +198,15 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     out.x2 = spsm_world_of(first + 2u);
     out.w = vec3<f32>(c[0].w, c[1].w, c[2].w);
     out.inner = spsm_inner_edges(first, t, w_scale);
+    // Hardware conservative rasterization (RendererOptions::hardware_conservative):
+    // the rasterizer finds every texel the true triangle touches, and
+    // fs_shadow keeps exactly those; z = w / 2 as the padded path's 0.5
+    // (fs_shadow writes its own depth). A degenerate triangle keeps the box
+    // below (a rasterizer may drop zero-area triangles).
+    if SPSM_HARDWARE_CONSERVATIVE && spsm_cross(t[1] - t[0], t[2] - t[0]) != 0.0 {
+        out.clip = vec4<f32>(c[corner].xy, 0.5 * c[corner].w, c[corner].w);
+        return out;
+    }
 
     // The padded bounding box and the right triangle (lo, lo + 2 (hi - lo) x, lo + 2 (hi - lo) y) around it.
     let margin = 0.5 + 1.0 / 64.0;

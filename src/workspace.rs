@@ -159,11 +159,27 @@ pub(crate) struct ViewCache {
     pub(crate) spot: LightEntry,
     /// PSM's hull `conv(V ∪ l) ∩ S ∩ L`.
     pub(crate) psm_hull: LightEntry,
+    /// PSM's optical axis around that hull, for the last key asked.
+    psm_axis: Option<PsmAxisMemo>,
     /// Retired bodies, kept for their buffers.
     spare: Vec<ConvexPolyhedron>,
     /// Counts the key's changes: a body lent out of the cache goes back
     /// only under the key it was made for.
     generation: u64,
+}
+
+/// The key of PSM's optical axis around its hull under the camera cache's
+/// key ([`ViewCache::psm_axis`]): the light's bits, then what else the axis
+/// reads (see `methods::psm`).
+pub(crate) type PsmAxisKey = [u64; 13];
+
+/// PSM's optical axis (`None`: the hull's directions fit in no cone), with
+/// the camera cache's key generation and the axis key it was found under.
+#[derive(Clone, Copy, Debug)]
+struct PsmAxisMemo {
+    generation: u64,
+    key: PsmAxisKey,
+    axis: Option<DVec3>,
 }
 
 /// A body lent out of the camera cache, with the key generation it was made
@@ -346,6 +362,25 @@ impl ViewCache {
             self.psm_hull.kept = Some((light, lent.body));
         } else {
             self.spare.push(lent.body);
+        }
+    }
+
+    /// PSM's optical axis around its hull, as found under the current
+    /// camera key for `key` ([`Self::store_psm_axis`]); `None` when not
+    /// held. The axis is a function of the camera key and `key` alone (the
+    /// hull is), so a still light and camera find it without the cone.
+    pub(crate) fn psm_axis(&self, key: &PsmAxisKey) -> Option<Option<DVec3>> {
+        match &self.psm_axis {
+            Some(memo) if memo.generation == self.generation && memo.key == *key => Some(memo.axis),
+            _ => None,
+        }
+    }
+
+    /// Keeps PSM's optical axis `axis` found for `key` under the current
+    /// camera key (nothing when the cache is off).
+    pub(crate) fn store_psm_axis(&mut self, key: PsmAxisKey, axis: Option<DVec3>) {
+        if self.enabled {
+            self.psm_axis = Some(PsmAxisMemo { generation: self.generation, key, axis });
         }
     }
 

@@ -135,3 +135,79 @@ fn cached_solves_are_bit_identical_to_uncached() {
     eprintln!("{compared} solves compared, {errors} of them errors");
     assert!(compared > cases * 120, "too few solves compared: {compared}");
 }
+
+/// PSM's axis, kept in the camera cache with its hull, is found again only
+/// for the same near-plane option and tolerances: one workspace solving a
+/// still light and camera with the options and tolerances alternating gives
+/// every uncached result, and each alternative differs from the default in
+/// enough cases that a stale axis would show.
+#[test]
+fn psm_axis_kept_per_option_and_tolerance() {
+    use lixel::{PsmOptions, Tolerances};
+    let cases = (common::cases() / 20).max(40);
+    let mut compared = 0;
+    // How often each alternative's result differs from the default's: the
+    // option, then the three tolerances, then the light.
+    let mut differing = [0usize; 5];
+    for i in 0..cases {
+        let config = if i % 2 == 0 { common::config(1516, i) } else { common::hard_config(1516, i).0 };
+        let Some(problem) = config.problem() else { continue };
+        let t = *problem.tolerances();
+        // The light moved along x alone (the key's light bits).
+        let x = problem.bounds().scene().diagonal() * 0.05;
+        let moved = match *problem.light() {
+            Light::Point { position } => Light::point(position + DVec3::X * x),
+            Light::Spot { position, direction, outer_half_angle_radians } => {
+                Light::spot(position + DVec3::X * x, direction, outer_half_angle_radians)
+            }
+            Light::Directional { direction } => Light::directional(direction + DVec3::X * 0.05),
+        };
+        let Ok(moved) = ShadowProblem::new(*problem.camera(), moved, *problem.bounds(), problem.map_size()) else {
+            continue;
+        };
+        let variants = [
+            problem.clone(),
+            problem.clone().with_tolerances(Tolerances { min_front_cosine: 0.9999, ..t }),
+            problem.clone().with_tolerances(Tolerances { coarse_eps: 0.3, ..t }),
+            problem.clone().with_tolerances(Tolerances { min_relative_span: 1e4, ..t }),
+            moved,
+        ];
+        let near = problem.camera().z_near();
+        let options = [0.0, 3.0, 6.0].map(|k| PsmOptions { min_view_depth: (k > 0.0).then_some(near * k) });
+        let uncached = |v: usize, o: usize| {
+            bits(&variants[v].solve_with(&Parameterization::Psm(options[o]), &mut SolveWorkspace::uncached()))
+        };
+        let default = uncached(0, 0);
+        differing[0] += usize::from(uncached(0, 1) != default);
+        for (v, count) in differing.iter_mut().enumerate().skip(1) {
+            *count += usize::from(uncached(v, 0) != default);
+        }
+        // Each alternative right after the default, differing from it in
+        // one key field only: a key missing that field hits a stale axis.
+        let mut order = Vec::new();
+        for o in 0..options.len() {
+            for v in 1..variants.len() {
+                order.extend([(0, o), (v, o)]);
+            }
+        }
+        for v in 0..variants.len() {
+            order.extend([(v, 0), (v, 1), (v, 2)]);
+        }
+        let mut own = SolveWorkspace::new();
+        for _ in 0..2 {
+            for &(v, o) in &order {
+                let expected = uncached(v, o);
+                for _ in 0..2 {
+                    let cached = variants[v].solve_with(&Parameterization::Psm(options[o]), &mut own);
+                    assert_eq!(bits(&cached), expected, "case {i}, variant {v}, option {o}");
+                    compared += 1;
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{compared} PSM solves compared; differing from the default (option, three tolerances, light): {differing:?}"
+    );
+    assert!(compared > cases * 20, "{compared} compared");
+    assert!(differing.iter().all(|&d| d > cases / 20), "{differing:?} differing of {cases}");
+}

@@ -41,7 +41,8 @@ fn texel_of(m: &LightMatrix, p: Vec3) -> DVec2 {
 /// Every texel a thin or sliver triangle touches gets a fragment, and no
 /// texel it does not touch (up to 1e-3 texel), for a directional and a
 /// point light; the stored triangles and depths decode to the CPU's within
-/// the packing's precision.
+/// the packing's precision, and the depth buffer holds the CPU's consistent
+/// minimum depth (the plane's minimum over the covered part of the texel).
 #[test]
 fn conservative_coverage_matches_the_cpu_reference() {
     let Some((device, queue)) = gpu() else { return };
@@ -76,6 +77,9 @@ fn conservative_coverage_matches_the_cpu_reference() {
     for (index, (light, m)) in lights.iter().zip(&all).enumerate() {
         let m = *m;
         let texels = renderer.read_map_words(index).unwrap().expect("spsm words");
+        // The depth buffer: the consistent minimum depth, squeezed (spsm_depth_key).
+        let keys = renderer.read_shadow_map(index).unwrap().depth;
+        let mut max_min_depth_error = 0.0f64;
         let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
         let projected: Vec<[DVec2; 3]> =
             shapes.iter().map(|t| [texel_of(&m, t[0]), texel_of(&m, t[1]), texel_of(&m, t[2])]).collect();
@@ -107,6 +111,13 @@ fn conservative_coverage_matches_the_cpu_reference() {
                     // Depth at the texel centre on the shape's plane, from the CPU.
                     let plane = plane_depth(&m, &shapes[k], DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
                     max_depth_error = max_depth_error.max((plane - d.depth).abs());
+                    // The consistent minimum depth: the plane's minimum over the
+                    // part of the texel the triangle covers (paper, section 4).
+                    if let Some(cpu) = min_depth_in_texel(&m, &shapes[k], projected[k], [x, y]) {
+                        let u = 2.0 * f64::from(keys[(y * w + x) as usize]) - 1.0;
+                        let gpu = u / (1.0 - u.abs());
+                        max_min_depth_error = max_min_depth_error.max((gpu - cpu).abs());
+                    }
                     let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
                     let g = DVec2::new(
                         plane_depth(&m, &shapes[k], c + DVec2::X) - plane,
@@ -125,12 +136,48 @@ fn conservative_coverage_matches_the_cpu_reference() {
                 }
             }
         }
-        eprintln!("{light:?}: {checked} touched texels; vertex error {max_vertex_error:.2e} texel, depth error {max_depth_error:.2e}, gradient error {worst_gradient:.2} of the code's bound");
+        eprintln!("{light:?}: {checked} touched texels; vertex error {max_vertex_error:.2e} texel, depth error {max_depth_error:.2e}, gradient error {worst_gradient:.2} of the code's bound, minimum depth error {max_min_depth_error:.2e}");
+        assert!(max_min_depth_error < 2e-5, "consistent minimum depth against the CPU: {max_min_depth_error}");
         assert!(worst_gradient <= 1.0, "the decoded gradient lies within the code's bound: {worst_gradient}");
         assert!(checked > 60, "the shapes touch texels: {checked}");
         assert!(max_vertex_error < 0.02, "f16 vertex offsets: {max_vertex_error}");
         assert!(max_depth_error < 2e-5, "16-bit depth at the centre: {max_depth_error}");
     }
+}
+
+/// The minimum of `tri`'s plane (post-projective depth) over the part of
+/// texel `[x, y]` it covers: the triangle (texel coordinates `t`) clipped to
+/// the texel's box (Sutherland–Hodgman), the plane's minimum at a vertex of
+/// the clipped polygon; `None` when nothing is left.
+fn min_depth_in_texel(m: &LightMatrix, tri: &[Vec3; 3], t: [DVec2; 3], texel: [i64; 2]) -> Option<f64> {
+    let (lo, hi) =
+        (DVec2::new(texel[0] as f64, texel[1] as f64), DVec2::new(texel[0] as f64 + 1.0, texel[1] as f64 + 1.0));
+    let mut poly = t.to_vec();
+    // Keep the side where `inside(p) >= 0`; each box side in turn.
+    let sides: [Box<dyn Fn(DVec2) -> f64>; 4] = [
+        Box::new(move |p| p.x - lo.x),
+        Box::new(move |p| hi.x - p.x),
+        Box::new(move |p| p.y - lo.y),
+        Box::new(move |p| hi.y - p.y),
+    ];
+    for inside in &sides {
+        let mut out = Vec::new();
+        for k in 0..poly.len() {
+            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+            let (da, db) = (inside(a), inside(b));
+            if da >= 0.0 {
+                out.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                out.push(a + (b - a) * (da / (da - db)));
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            return None;
+        }
+    }
+    poly.iter().map(|&p| plane_depth(m, tri, p)).reduce(f64::min)
 }
 
 /// Post-projective depth at texel position `t` on the plane of `tri`.
@@ -451,4 +498,247 @@ fn tessellated_cylinder_keeps_its_shadow_edges() {
     // neighbour grown 3x, reaches only part of the way to the silhouette.
     assert!(errors[2].0 * 100 < errors[1].0 * 85, "inner edges cut the false light by 15%: {errors:?}");
     assert!(errors[2].1 * 100 < shadowed, "false shadow below 1% of the shadow: {errors:?}");
+}
+
+/// The issue's acne report: SPSM's depth test uses the stored triangle's
+/// plane with a constant bias of 1e-5 of the depth range
+/// ([`SpsmOptions::bias`], no slope-scaled bias), so acne is false shadow on
+/// surfaces the truth calls lit and facing the light. Counted on the tiny
+/// scene (focused 256² maps, sun and point light) for the default lookup,
+/// for the plane test with the constant bias alone (no packing tolerance),
+/// and for the paper's lookup alone (no standard fallback) with the constant
+/// bias alone; "interior" leaves out pixels within one pixel of a shadow
+/// boundary or silhouette in the truth (edge error, not acne).
+#[test]
+fn acne_at_the_constant_bias() {
+    let Some((device, queue)) = gpu() else { return };
+    assert_eq!(SpsmOptions::PAPER.bias, 1e-5, "the issue's constant bias");
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(160);
+    let lights = test_lights();
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 160, 160);
+    let matrices = matrices(&scene, &camera, &lights, 256, &Parameterization::Focused);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let bias_alone = SpsmOptions { packing_tolerance: false, ..SpsmOptions::PAPER };
+    let paper_alone = SpsmOptions { packing_tolerance: false, ..SpsmOptions::SUBPIXEL_ONLY };
+    let lookups = [
+        ("standard (slope-scaled bias)", ShadowLookup::DepthCompare),
+        ("spsm default", SPSM),
+        ("spsm, constant bias alone", ShadowLookup::Spsm(bias_alone)),
+        ("spsm without fallback, constant bias alone", ShadowLookup::Spsm(paper_alone)),
+    ];
+    let lit_facing = |light: u32| {
+        (0..truth.depth.len())
+            .filter(|&i| truth.visible(i) && truth.facing[i] >> light & 1 == 1 && truth.shadow[i] >> light & 1 == 0)
+            .count()
+    };
+    let lit: usize = (0..lights.len() as u32).map(lit_facing).sum();
+    let mut acne = Vec::new();
+    for (name, lookup) in lookups {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &matrices) }).unwrap();
+        let gpu = renderer.read_masks().unwrap();
+        let (mut all, mut interior, mut compared) = (0usize, 0usize, 0u64);
+        for light in 0..lights.len() as u32 {
+            all += (0..truth.depth.len())
+                .filter(|&i| truth.visible(i) && truth.facing[i] >> light & 1 == 1)
+                .filter(|&i| truth.shadow[i] >> light & 1 == 0 && gpu.shadow[i] >> light & 1 == 1)
+                .count();
+            let a = truth.agreement_away_from_boundaries(&gpu, light, 1);
+            interior += a.false_shadow as usize;
+            compared += a.compared;
+        }
+        eprintln!("{name}: false shadow on lit light-facing pixels {all} of {lit}, interior {interior} of {compared} compared");
+        acne.push((all, interior));
+    }
+    // Measured (lavapipe and GL, session 13): standard 101 (interior 0),
+    // SPSM default 5 (0), the constant bias alone 7381 (6298) and without the
+    // fallback 7401 (6312) of 24979 lit light-facing pixels: at 1e-5 alone
+    // the decoded planes' error (16-bit centre depth, 16-bit gradient code,
+    // extrapolated up to a texel and more) exceeds the bias on about a third
+    // of the lit surfaces; the packing tolerance (on by default) removes it.
+    assert!(lit > 10_000, "the scene has lit light-facing pixels: {lit}");
+    assert!(acne[1].1 * 1000 <= lit, "default SPSM: interior acne at most 0.1% of the lit pixels: {acne:?}");
+    assert!(acne[1].0 <= acne[0].0, "default SPSM: no more false shadow on lit surfaces than standard: {acne:?}");
+    assert!(acne[2].0 > acne[1].0, "the packing tolerance is what removes the acne: {acne:?}");
+}
+
+/// SPSM works with every light matrix and every light kind (issue 16: "usable
+/// with every `LightMatrix`"): on the tiny scene with a sun, a point light and
+/// a spot light, for the normal, focused, focused-snapped, PSM, LiSPSM and
+/// plane-optimal maps and the scene optimizer settled by a `ShadowLoop` whose
+/// analysis bits come from the SPSM lookup, SPSM's bits agree with the ray
+/// cast away from boundaries (99%, or as well as the standard lookup where
+/// that is lower: PSM), and with each matrix it misclassifies fewer pixels
+/// than the standard lookup. Measured (lavapipe, session 13), standard /
+/// SPSM: normal 874 / 528, focused 466 / 239, focused-snapped 664 / 418,
+/// PSM 2849 / 2088, LiSPSM 501 / 287, plane-optimal 428 / 173, optimized
+/// 404 / 186.
+#[test]
+fn spsm_works_with_every_matrix_and_light_kind() {
+    use lixel::render::{LoopOptions, LoopPolicy, LoopView, ShadowLoop};
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(160);
+    let lights = [
+        Light::directional(DVec3::new(0.6, -1.0, 0.35)),
+        Light::point(DVec3::new(-8.0, 30.0, 12.0)),
+        Light::spot(DVec3::new(6.0, 25.0, 10.0), DVec3::new(-6.0, -25.0, -10.0), 35f64.to_radians()),
+    ];
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 160, 160);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let mut sets: Vec<(String, Vec<LightMatrix>)> = Parameterization::ALL_DEFAULT
+        .iter()
+        .map(|p| (format!("{:?}", p.method()), matrices(&scene, &camera, &lights, 256, p)))
+        .collect();
+    let view =
+        LoopView { camera: &camera, lights: &lights, bounds: scene.bounds(), map: lixel::ShadowMapSize::square(256) };
+    let options = LoopOptions { lookup: SPSM, ..Default::default() };
+    let settled =
+        ShadowLoop::new(LoopPolicy::Optimized, lights.len(), options).unwrap().settle(&mut renderer, &view, 6).unwrap();
+    sets.push(("Optimized (settled with SPSM)".into(), settled.matrices));
+    let (mut standard_total, mut spsm_total) = (0, 0);
+    for (name, m) in &sets {
+        let (mut counts, mut agreements) = (Vec::new(), Vec::new());
+        for lookup in [ShadowLookup::DepthCompare, SPSM] {
+            renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, m) }).unwrap();
+            let gpu = renderer.read_masks().unwrap();
+            let mut total = 0;
+            for light in 0..lights.len() as u32 {
+                agreements.push(truth.agreement_away_from_boundaries(&gpu, light, 1).fraction());
+                total += gpu.misclassified(&truth, light).unwrap();
+            }
+            counts.push(total);
+        }
+        eprintln!("{name}: misclassified standard {}, spsm {}; agreement away from boundaries per light, standard then spsm {agreements:.4?}", counts[0], counts[1]);
+        // PSM's own standard lookup agrees on only 96.4% (sun) here: SPSM
+        // must reach 99% or the standard lookup's agreement.
+        let (standard, spsm) = agreements.split_at(lights.len());
+        for (light, (a, b)) in standard.iter().zip(spsm).enumerate() {
+            assert!(*b >= a.min(0.99), "{name}, light {light}: spsm {b} against standard {a}");
+        }
+        assert!(counts[1] < counts[0], "{name}: SPSM lowers the error: {counts:?}");
+        standard_total += counts[0];
+        spsm_total += counts[1];
+    }
+    let spot_lit = (0..truth.depth.len()).filter(|&i| truth.visible(i) && truth.facing[i] >> 2 & 1 == 1).count();
+    eprintln!("all matrices: standard {standard_total}, spsm {spsm_total}; spot light reaches {spot_lit} pixels");
+    assert!(spot_lit > 1000, "the spot light reaches the view: {spot_lit}");
+    assert!(spsm_total < standard_total, "SPSM lowers the error over every matrix: {spsm_total} vs {standard_total}");
+}
+
+/// The issue's premise at the scale where it holds: a pole and a fence of
+/// four wires 0.0015 thick (about 0.05 texel of a 256² normal map), seen
+/// close up (a 4° camera looking down on their shadows, a screen pixel about
+/// 0.03 texel), so the ray-cast shadows are a few pixels wide. A standard
+/// map samples texel centres, which such casters almost never cover: it
+/// loses them entirely. SPSM's conservative pass keeps every texel they
+/// touch, and [`SpsmOptions::THIN_CASTERS`] keeps every shadow pixel.
+///
+/// Measured (lavapipe and GL, issue 16 session 13): of 1592 ray-cast shadow
+/// pixels, (found, false shadow) standard (0, 0), SPSM default (`PAPER`)
+/// (0, 0), `THIN_CASTERS` (1592, 23408). So the default lookup loses these
+/// casters as the standard map does (the stored triangle is one of a wire
+/// face's two slivers, p mostly lies in the other, and the hybrid lookup
+/// takes the standard verdict), and the thin-caster rules keep them only at
+/// texel width: the false shadow fills the texel rows the wires cross
+/// (58% of this close-up view). The issue's "SPSM keeps them" holds only in
+/// that coarse sense; not asserted beyond it.
+#[test]
+fn sub_texel_fence_lost_by_the_standard_map() {
+    let Some((device, queue)) = gpu() else { return };
+    let half = 0.00075;
+    let mut casters = Mesh::default();
+    let pole = lixel::mesh::primitives::cuboid(Vec3::new(half, 0.5, half), 12);
+    casters.append(&pole.transformed(&glam::Affine3A::from_translation(Vec3::new(-0.4, 0.5, 0.0))));
+    for (k, z) in [-0.06f32, -0.02, 0.02, 0.06].into_iter().enumerate() {
+        let wire = lixel::mesh::primitives::cuboid(Vec3::new(1.0, half, half), 12);
+        let at = Vec3::new(0.0, 0.6 + 0.2 * k as f32, z);
+        casters.append(&wire.transformed(&glam::Affine3A::from_translation(at)));
+    }
+    let scene = Scene {
+        objects: vec![
+            object("fence", casters, Role::CasterAndReceiver),
+            object("floor", lixel::mesh::primitives::floor(8.0, 2), Role::Receiver),
+        ],
+    };
+    let size = 200;
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 3.0, 0.0),
+        DVec3::ZERO,
+        DVec3::NEG_Z,
+        4f64.to_radians(),
+        UVec2::splat(size),
+        0.5,
+        100.0,
+    )
+    .expect("camera");
+    let lights = [Light::directional(DVec3::new(0.5, -1.0, 0.0))];
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, size, size);
+    let count = |masks: &lixel::mesh::ShadowMasks, truth_bit: u32, bit: u32| {
+        (0..truth.depth.len())
+            .filter(|&i| truth.visible(i) && truth.shadow[i] & 1 == truth_bit && masks.shadow[i] & 1 == bit)
+            .count()
+    };
+    let expected = count(&truth, 1, 1);
+    let m = matrices(&scene, &camera, &lights, 256, &Parameterization::Normal);
+    let texel = {
+        let (a, b) = (texel_of(&m[0], Vec3::ZERO), texel_of(&m[0], Vec3::new(0.0, 0.0, 0.1)));
+        0.1 / (a - b).length()
+    };
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    let mut found = Vec::new();
+    for lookup in [ShadowLookup::DepthCompare, SPSM, SPSM_THIN] {
+        renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, &m) }).unwrap();
+        let masks = renderer.read_masks().unwrap();
+        found.push((count(&masks, 1, 1), count(&masks, 0, 1)));
+    }
+    eprintln!(
+        "texel {texel:.4} units, casters {:.3} texel thick; true shadow pixels {expected}; (found, false shadow) standard {:?}, spsm {:?}, spsm thin casters {:?}",
+        2.0 * half as f64 / texel,
+        found[0],
+        found[1],
+        found[2]
+    );
+    assert!(expected > 500, "the ray cast sees the thin shadows: {expected}");
+    assert!(2.0 * f64::from(half) / texel < 0.1, "the casters are thinner than a tenth of a texel");
+    assert!(found[0].0 * 10 < expected, "the standard map loses (nearly) all of them: {found:?}");
+    assert!(found[2].0 * 10 >= expected * 9, "SPSM with the thin-caster rules keeps at least 90%: {found:?}");
+}
+
+/// `RendererOptions::hardware_conservative`: where the device has
+/// `CONSERVATIVE_RASTERIZATION`, the SPSM maps (texel words and the
+/// consistent minimum depths) and the masks from the rasterizer's
+/// conservative mode equal the shader path's, bit for bit, on the tiny
+/// scene (focused 128² maps, sun and point light). Where the device lacks
+/// the feature (lavapipe, llvmpipe GL) the option is ignored and the test
+/// checks only that (the comparison then holds trivially); it says which.
+#[test]
+fn hardware_conservative_maps_match_the_shader_path() {
+    let Some((device, queue)) = gpu() else { return };
+    let has = device.features().contains(wgpu::Features::CONSERVATIVE_RASTERIZATION);
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(96);
+    let lights = test_lights();
+    let m = matrices(&scene, &camera, &lights, 128, &Parameterization::Focused);
+    let shader = RendererOptions::default();
+    let hardware = RendererOptions { hardware_conservative: true, ..RendererOptions::default() };
+    let mut results = Vec::new();
+    for options in [shader, hardware] {
+        let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+        renderer.render(&Frame { masks: true, lookup: SPSM, ..Frame::new(&camera, &m) }).unwrap();
+        let words: Vec<_> =
+            (0..lights.len()).map(|l| renderer.read_map_words(l).unwrap().expect("spsm words")).collect();
+        let depths: Vec<_> = (0..lights.len()).map(|l| renderer.read_shadow_map(l).unwrap().depth).collect();
+        results.push((renderer.hardware_conservative(), words, depths, renderer.read_masks().unwrap()));
+    }
+    eprintln!("device has CONSERVATIVE_RASTERIZATION: {has}; renderers use it: {} / {}", results[0].0, results[1].0);
+    assert!(!results[0].0, "off by default");
+    assert_eq!(results[1].0, has, "used exactly where the device has it");
+    for light in 0..lights.len() {
+        let differ = results[0].1[light].iter().zip(&results[1].1[light]).filter(|(a, b)| a != b).count();
+        let depth_differ = results[0].2[light].iter().zip(&results[1].2[light]).filter(|(a, b)| a != b).count();
+        eprintln!("light {light}: {differ} texel words and {depth_differ} depths differ");
+        assert_eq!((differ, depth_differ), (0, 0), "light {light}: hardware and shader maps differ");
+    }
+    assert!(results[0].3 == results[1].3, "the masks differ");
 }

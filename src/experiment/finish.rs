@@ -67,7 +67,8 @@ pub(super) fn finish(
     started: Instant,
 ) -> Result<Summary, ExperimentError> {
     if config.shard.is_some() {
-        let mut summary = report::summarize(config, rows, (Vec::new(), Vec::new()), started.elapsed(), warnings);
+        let mut summary =
+            report::summarize(config, rows, (Vec::new(), Vec::new(), Vec::new()), started.elapsed(), warnings);
         summary.adapter.clone_from(&completeness.adapter);
         report::write_shard(dir, config, rows, &summary)?;
         return Ok(summary);
@@ -96,16 +97,28 @@ pub(super) fn equivalence_count(config: &ExperimentConfig) -> usize {
 fn equivalence(runners: &mut [Runner<'_>], config: &ExperimentConfig) -> Result<Equivalence, ExperimentError> {
     let count = equivalence_count(config);
     if count == 0 || !config.methods.contains(&MethodSpec::OPTIMIZED) {
-        return Ok((Vec::new(), Vec::new()));
+        return Ok((Vec::new(), Vec::new(), Vec::new()));
     }
     // One pass over the configurations: each truth is traced once for the
     // whole ladder and both optimized sizes.
     const OPTIMIZED_SIZES: [u32; 2] = [400, 1024];
+    // The scene-optimized method with another lookup (e.g. `optimized+spsm`,
+    // issue 16) in the run: at the first size only (a 1024² SPSM map costs
+    // far more than a standard one on a CPU rasterizer).
+    let with_lookups: Vec<MethodSpec> = config
+        .methods
+        .iter()
+        .copied()
+        .filter(|&m| {
+            m != MethodSpec::OPTIMIZED && m.with_lookup(MethodSpec::OPTIMIZED.lookup()) == MethodSpec::OPTIMIZED
+        })
+        .collect();
     let runs: Vec<(MethodSpec, u32)> = config
         .equivalence_ladder
         .iter()
         .map(|&size| (MethodSpec::FOCUSED, size))
         .chain(OPTIMIZED_SIZES.iter().map(|&size| (MethodSpec::OPTIMIZED, size)))
+        .chain(with_lookups.iter().map(|&m| (m, OPTIMIZED_SIZES[0])))
         .collect();
     // The ladder's maps (up to 4000²) need one layer, not the shared
     // frame's one per method.
@@ -125,14 +138,20 @@ fn equivalence(runners: &mut [Runner<'_>], config: &ExperimentConfig) -> Result<
         },
     )?;
     let means = means_in_order(runs.len(), &per_config);
-    let (focused, optimized) = means.split_at(config.equivalence_ladder.len());
+    let (focused, rest) = means.split_at(config.equivalence_ladder.len());
+    let (optimized, looked_up) = rest.split_at(OPTIMIZED_SIZES.len());
     let ladder: Vec<(u32, f64)> = config.equivalence_ladder.iter().copied().zip(focused.iter().copied()).collect();
     let result = OPTIMIZED_SIZES
         .iter()
         .zip(optimized)
         .map(|(&size, &mean)| (size, mean, report::crossing(&ladder, mean)))
         .collect();
-    Ok((result, ladder))
+    let lookups = with_lookups
+        .iter()
+        .zip(looked_up)
+        .map(|(&m, &mean)| (m, OPTIMIZED_SIZES[0], mean, report::crossing(&ladder, mean)))
+        .collect();
+    Ok((result, ladder, lookups))
 }
 
 /// For every method: its best, median and worst configuration re-run, with

@@ -255,6 +255,7 @@ mod tests {
             truth_agreement: None,
             equivalence: vec![(400, 120.0, Some(900.0)), (1024, 40.0, Some(2100.0))],
             ladder: vec![(400, 400.0), (800, 180.0), (1600, 80.0), (3200, 30.0)],
+            lookup_equivalence: Vec::new(),
             elapsed: std::time::Duration::ZERO,
             warnings: Vec::new(),
             missing: Vec::new(),

@@ -52,6 +52,10 @@ pub struct Summary {
     pub equivalence: Vec<(u32, f64, Option<f64>)>,
     /// The focused ladder measured for the equivalence: (size, mean error).
     pub ladder: Vec<(u32, f64)>,
+    /// The same for the scene-optimized method with another lookup in the
+    /// run (e.g. `optimized+spsm`, issue 16): (method, map size, its mean
+    /// error, focused size reaching it).
+    pub lookup_equivalence: Vec<(MethodSpec, u32, f64, Option<f64>)>,
     /// Wall time of the run.
     pub elapsed: Duration,
     /// Warnings (configurations that counted 0 pixels, accepted setting
@@ -66,7 +70,7 @@ pub struct Summary {
 }
 
 /// The resolution-equivalence figures (empty when disabled).
-pub(super) type Equivalence = (Vec<(u32, f64, Option<f64>)>, Vec<(u32, f64)>);
+pub(super) type Equivalence = (Vec<(u32, f64, Option<f64>)>, Vec<(u32, f64)>, Vec<(MethodSpec, u32, f64, Option<f64>)>);
 
 /// The focused size whose mean error equals `target`, interpolated in
 /// log-log between the ladder's sizes; `None` outside the ladder.
@@ -168,6 +172,7 @@ pub(super) fn summarize(
         truth_agreement,
         equivalence: equivalence.0,
         ladder: equivalence.1,
+        lookup_equivalence: equivalence.2,
         elapsed,
         warnings,
         missing: Vec::new(),
@@ -342,6 +347,10 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
             let eq = eq.map(|s| format!("{s:.0}²")).unwrap_or_else(|| "outside the ladder".into());
             let _ = writeln!(md, "| {size}² | {mean:.1} | {eq} |");
         }
+        for (method, size, mean, eq) in &summary.lookup_equivalence {
+            let eq = eq.map(|s| format!("{s:.0}²")).unwrap_or_else(|| "outside the ladder".into());
+            let _ = writeln!(md, "| {size}², {} | {mean:.1} | {eq} |", method.name());
+        }
         let ladder: Vec<String> = summary.ladder.iter().map(|(s, e)| format!("{s}²: {e:.1}")).collect();
         let _ = writeln!(md, "\nFocused ladder: {}.", ladder.join(", "));
         let _ = writeln!(md, "\n![resolution equivalence](equivalence.png)");
@@ -383,6 +392,12 @@ mod tests {
             truth_agreement: None,
             equivalence: vec![(400, 10.0, None)],
             ladder: vec![(256, 20.0)],
+            lookup_equivalence: vec![(
+                MethodSpec::OPTIMIZED.with_lookup(crate::render::ShadowLookup::Spsm(Default::default())),
+                400,
+                15.0,
+                Some(300.0),
+            )],
             elapsed: Duration::ZERO,
             warnings: vec!["a warning".into()],
             missing: vec![3],
@@ -391,6 +406,7 @@ mod tests {
         };
         let md = markdown(&config, &summary, &[]);
         assert!(md.contains("Resolution equivalence (first 6 configurations)"), "{md}");
+        assert!(md.contains("| 400², optimized+spsm | 15.0 | 300² |"), "{md}");
         assert!(
             md.contains("PARTIAL REPORT: 1 of 6 configurations are missing (3)") && md.contains("Warning: a warning")
         );

@@ -33,7 +33,7 @@ use crate::geometry::{min_enclosing_cone_in, ConvexPolyhedron};
 use crate::light::LightFrame;
 use crate::matrix::{Fallback, LightMatrix, Method};
 use crate::problem::ShadowProblem;
-use crate::workspace::SolveWorkspace;
+use crate::workspace::{light_bits, PsmAxisKey, SolveWorkspace};
 
 /// Options of [`Parameterization::Psm`](crate::Parameterization::Psm).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,23 +140,55 @@ fn solve_for(
     // a matrix is moved once fewer.) The camera cache was prepared by
     // `with_visible_receiver_body`.
     let hull = problem.lend_psm_hull_prepared(ws);
-    let first = attempt(problem, options, frame, &hull.body, focus, None, ws);
+    let key = Some(axis_key(problem, options));
+    let first = attempt(problem, options, frame, &hull.body, focus, None, key, ws);
     problem.give_back_psm_hull(hull, ws);
     if first.is_ok() {
         return first;
     }
     let fallback = Some(Fallback::PsmHullAroundLight);
-    let second = attempt(problem, options, frame, focus, focus, fallback, ws);
+    let second = attempt(problem, options, frame, focus, focus, fallback, None, ws);
     if second.is_ok() {
         return second;
     }
     super::focused::around(problem, focus, Method::Psm, fallback, ws)
 }
 
+/// The key of PSM's axis around its hull `H` under the camera cache's key
+/// ([`crate::workspace::ViewCache::psm_axis`]): what [`psm_axis`] reads
+/// besides the camera, the bounds and the plane tolerance (the cache's key)
+/// and `H`, the frame and the mappable vertices (functions of those and the
+/// light): the light, the near plane's option, the coarse tolerance (the
+/// mappable vertices), the relative span (the far plane) and the least
+/// front cosine.
+fn axis_key(problem: &ShadowProblem, options: &PsmOptions) -> PsmAxisKey {
+    let l = light_bits(problem.light());
+    let (has_depth, depth) = options.min_view_depth.map_or((0, 0), |d| (1, d.to_bits()));
+    let t = problem.tolerances();
+    [
+        l[0],
+        l[1],
+        l[2],
+        l[3],
+        l[4],
+        l[5],
+        l[6],
+        l[7],
+        has_depth,
+        depth,
+        problem.coarse_eps().to_bits(),
+        t.min_relative_span.to_bits(),
+        t.min_front_cosine.to_bits(),
+    ]
+}
+
 /// PSM's map around `region` (with the visible receivers `focus`): its
 /// axis, then the placement; an error where either fails (no axis:
 /// [`LixelError::NotInFront`]). `region`'s mappable vertices are taken once
-/// for both.
+/// for both. With `key` (`region` is the hull `H`), the axis is taken from
+/// the camera cache when it was found for the same key, and kept there
+/// otherwise.
+#[allow(clippy::too_many_arguments)]
 fn attempt(
     problem: &ShadowProblem,
     options: &PsmOptions,
@@ -164,11 +196,23 @@ fn attempt(
     region: &ConvexPolyhedron,
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
+    key: Option<PsmAxisKey>,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
     let mut mapped = ws.take_points();
     problem.mappable_vertices_into(region, &mut mapped, ws);
-    let result = match psm_axis(problem, options, region, &mapped, &frame, ws) {
+    let axis = match key {
+        Some(key) => match ws.view.psm_axis(&key) {
+            Some(axis) => axis,
+            None => {
+                let axis = psm_axis(problem, options, region, &mapped, &frame, ws);
+                ws.view.store_psm_axis(key, axis);
+                axis
+            }
+        },
+        None => psm_axis(problem, options, region, &mapped, &frame, ws),
+    };
+    let result = match axis {
         Some(axis) => place(problem, frame, axis, region, &mapped, focus, fallback, ws),
         None => Err(LixelError::NotInFront { method: Method::Psm }),
     };

@@ -188,9 +188,11 @@ impl LookupState {
         lookup: ShadowLookup,
         layouts: &SceneLayouts,
         unclipped_available: bool,
+        hardware_conservative: bool,
         pulled: Option<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
         let spec = lookup.spec();
+        let hardware_conservative = hardware_conservative && spec.pulls_vertices;
         // Depth bound as unfilterable float: naga cannot translate
         // `textureLoad` from a `texture_depth_*` to GLSL (the GL backend).
         let mut entries = vec![map_entry(0, wgpu::TextureSampleType::Float { filterable: false })];
@@ -234,7 +236,13 @@ impl LookupState {
             format!("lixel analysis shader ({})", lookup.name()),
             scene_source(include_str!("../../shaders/analysis.wgsl")),
         );
-        let shadow_source = format!("{}{}", include_str!("../../shaders/light_depth.wgsl"), &spec.shadow_wgsl);
+        // spsm_pass.wgsl's vertex stage emits the true triangle when the
+        // rasterizer is conservative (unused by the other passes).
+        let shadow_source = format!(
+            "const SPSM_HARDWARE_CONSERVATIVE: bool = {hardware_conservative};\n{}{}",
+            include_str!("../../shaders/light_depth.wgsl"),
+            &spec.shadow_wgsl
+        );
         let shadow_module = module(
             format!("lixel shadow shader ({})", lookup.name()),
             wgpu::ShaderSource::Wgsl(Cow::Owned(shadow_source)),
@@ -245,6 +253,7 @@ impl LookupState {
             spec.map_color,
             sweep.is_some(),
             unclipped_available,
+            hardware_conservative,
             pulled.filter(|_| spec.pulls_vertices),
         );
         let maps_spec = MapsSpec {
@@ -337,6 +346,7 @@ impl ShadowPass {
         map_color: Option<wgpu::TextureFormat>,
         sgsm_slopes: bool,
         unclipped_available: bool,
+        conservative: bool,
         pulled: Option<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer)>,
     ) -> Self {
         let storage = |binding| storage_entry(binding, wgpu::ShaderStages::VERTEX, true, false);
@@ -420,6 +430,7 @@ impl ShadowPass {
                         // OBJ files need not be closed or consistently wound.
                         cull_mode,
                         unclipped_depth: unclipped,
+                        conservative,
                         ..Default::default()
                     },
                     depth_stencil: Some(wgpu::DepthStencilState {

@@ -301,6 +301,9 @@ pub struct Renderer {
     options: RendererOptions,
     max_texture: u32,
     unclipped_available: bool,
+    /// SPSM and SGSM passes use the rasterizer's conservative mode
+    /// ([`RendererOptions::hardware_conservative`] and the device has it).
+    hardware_conservative: bool,
     scene: GpuScene,
     layouts: SceneLayouts,
     /// Pipelines and maps of each lookup mode used so far.
@@ -348,6 +351,7 @@ impl std::fmt::Debug for Renderer {
             .field("frame", &self.frame)
             .field("triangles", &(self.scene.index_count / 3))
             .field("unclipped_available", &self.unclipped_available)
+            .field("hardware_conservative", &self.hardware_conservative)
             .field("timestamps", &self.timer.is_some())
             .field("ring", &self.ring)
             .finish_non_exhaustive()
@@ -359,7 +363,9 @@ impl Renderer {
     /// `DEPTH_CLIP_CONTROL` (unclipped depth) and `TIMESTAMP_QUERY`.
     #[must_use]
     pub fn optional_features() -> wgpu::Features {
-        wgpu::Features::DEPTH_CLIP_CONTROL | wgpu::Features::TIMESTAMP_QUERY
+        wgpu::Features::DEPTH_CLIP_CONTROL
+            | wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::CONSERVATIVE_RASTERIZATION
     }
 
     /// Uploads `scene` and builds the pipelines.
@@ -381,6 +387,8 @@ impl Renderer {
         check_target(aw, ah, max_texture)?;
         let features = device.features();
         let unclipped_available = features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
+        let hardware_conservative =
+            options.hardware_conservative && features.contains(wgpu::Features::CONSERVATIVE_RASTERIZATION);
         let timer = (options.timestamps && features.contains(wgpu::Features::TIMESTAMP_QUERY))
             .then(|| GpuTimer::new(device, queue));
 
@@ -467,7 +475,7 @@ impl Renderer {
         // pay for its pipelines.
         // (It pulls no vertices, so it needs no edge adjacency.)
         let lookups = vec![device::capture(device, "shadow, camera and analysis pipelines", || {
-            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available, None)
+            LookupState::new(device, ShadowLookup::default(), &layouts, unclipped_available, false, None)
         })?];
         let ring = ReadbackRing::new(
             device,
@@ -480,6 +488,7 @@ impl Renderer {
             queue: queue.clone(),
             max_texture,
             unclipped_available,
+            hardware_conservative,
             scene: gpu_scene,
             layouts,
             lookups,
@@ -580,6 +589,14 @@ impl Renderer {
     #[must_use]
     pub fn unclipped_depth_available(&self) -> bool {
         self.unclipped_available
+    }
+
+    /// Whether SPSM and SGSM passes use the rasterizer's conservative mode
+    /// ([`RendererOptions::hardware_conservative`] set and the device has
+    /// `CONSERVATIVE_RASTERIZATION`) rather than the shader's padded triangles.
+    #[must_use]
+    pub fn hardware_conservative(&self) -> bool {
+        self.hardware_conservative
     }
 
     /// Whether GPU timestamps are recorded.
@@ -850,7 +867,14 @@ impl Renderer {
         let scene = &self.scene;
         let pulled = scene.adjacent.as_ref().map(|adjacent| (&scene.vertices, &scene.indices, adjacent));
         let state = device::capture(&self.device, "shadow, camera and analysis pipelines", || {
-            LookupState::new(&self.device, lookup, &self.layouts, self.unclipped_available, pulled)
+            LookupState::new(
+                &self.device,
+                lookup,
+                &self.layouts,
+                self.unclipped_available,
+                self.hardware_conservative,
+                pulled,
+            )
         })?;
         self.lookups.push(state);
         Ok(self.lookups.len() - 1)

@@ -152,6 +152,16 @@ pub struct RendererOptions {
     /// Not for frames with GPU timestamps (which time every pass) nor SGSM
     /// (its sweep follows the passes); off by default.
     pub reuse_maps: bool,
+    /// SPSM and SGSM passes: let the rasterizer's conservative mode
+    /// (`wgpu::Features::CONSERVATIVE_RASTERIZATION`, overestimation) find the
+    /// texels a triangle touches where the device has it, instead of the
+    /// vertex stage's padded triangle; the fragment stage's exact texel test
+    /// is the same, so the maps should be too (issue 16). Off by default: no
+    /// adapter lixel has run on offers the feature (lavapipe, llvmpipe GL),
+    /// so "both give the same maps" (`render_spsm`'s
+    /// `hardware_conservative_maps_match_the_shader_path`) has not been shown
+    /// yet. Ignored where the device lacks the feature.
+    pub hardware_conservative: bool,
 }
 
 impl Default for RendererOptions {
@@ -167,6 +177,7 @@ impl Default for RendererOptions {
             timestamps: true,
             cull_objects: true,
             reuse_maps: false,
+            hardware_conservative: false,
         }
     }
 }
