@@ -113,6 +113,12 @@ fn lookup_suffixes_are_deterministic() {
         files.push(std::fs::read_to_string(dir.join(run).join("configs.csv")).unwrap());
     }
     assert!(files[0] == files[1], "two runs differ:\n{}\n{}", files[0], files[1]);
+    // The report gives the antialiased methods' pair-list use (issue 18's memory goal).
+    let report = std::fs::read_to_string(dir.join("a").join("report.md")).unwrap();
+    assert!(report.contains("Pair lists of the antialiased lookups"), "{report}");
+    // Each method has a row in the method table; the antialiased ones a second in the pair-list table.
+    let rows = |name: &str| report.lines().filter(|l| l.starts_with(&format!("| {name} | 2 | "))).count();
+    assert_eq!((rows("focused+aa32"), rows("optimized+aa32"), rows("focused+spsm")), (2, 2, 1), "{report}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

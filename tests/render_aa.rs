@@ -149,13 +149,86 @@ fn pair_count_matches_a_cpu_count() {
     assert_eq!(stats.overflow_pixels, 0);
 }
 
+/// The pairs themselves against a CPU reference: every list tile's
+/// triangles (read back, sorted) equal the CPU's set from the same rules
+/// (box grown by a texel, list tiles of active tiles of the GPU's own
+/// mask), except where a CPU box corner lies within 0.01 texel of a texel
+/// border (f32 against f64 corners may floor differently there). A sun
+/// and a point light, 128² focused maps.
+#[test]
+fn pair_lists_match_a_cpu_reference() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let mesh = merged(&scene);
+    let cam = camera(64);
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    renderer.set_aa_uncertain_pixels(false).unwrap();
+    const LIST: i64 = Renderer::AA_LIST_TILE as i64;
+    for light in test_lights() {
+        let m = matrices(&scene, &cam, &[light], 128, &Parameterization::Focused)[0];
+        renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
+        let (mask, _) = renderer.read_silhouette_mask(0).unwrap();
+        let lists = renderer.read_aa_lists(0).unwrap();
+        let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
+        let lists_x = (w + LIST - 1) / LIST;
+        assert_eq!(lists.len() as i64, lists_x * ((h + LIST - 1) / LIST));
+        let active = |tx: i64, ty: i64| {
+            let (x0, y0) = ((tx * 8 - 16).max(0), (ty * 8 - 16).max(0));
+            let (x1, y1) = ((tx * 8 + 23).min(w - 1), (ty * 8 + 23).min(h - 1));
+            (y0..=y1).any(|y| (x0..=x1).any(|x| mask[(y * w + x) as usize] != 0))
+        };
+        let mut expected: Vec<Vec<u32>> = vec![Vec::new(); lists.len()];
+        let mut borderline = std::collections::HashSet::new();
+        for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+            let p: Vec<DVec2> = tri.iter().filter_map(|&i| texel_of(&m, mesh.positions[i as usize])).collect();
+            assert_eq!(p.len(), 3, "nothing behind the light");
+            let lo = p.iter().fold(DVec2::INFINITY, |a, b| a.min(*b));
+            let hi = p.iter().fold(DVec2::NEG_INFINITY, |a, b| a.max(*b));
+            if hi.x < -1.0 || hi.y < -1.0 || lo.x > w as f64 + 1.0 || lo.y > h as f64 + 1.0 {
+                continue;
+            }
+            let near_border = [lo.x, lo.y, hi.x, hi.y].iter().any(|c| (c - c.round()).abs() < 0.01);
+            if near_border {
+                borderline.insert(t as u32);
+            }
+            let a = ((lo.x.floor() as i64 - 1).clamp(0, w - 1), (lo.y.floor() as i64 - 1).clamp(0, h - 1));
+            let b = ((hi.x.floor() as i64 + 1).clamp(0, w - 1), (hi.y.floor() as i64 + 1).clamp(0, h - 1));
+            for ly in a.1 / LIST..=b.1 / LIST {
+                for lx in a.0 / LIST..=b.0 / LIST {
+                    if active(lx * LIST / 8, ly * LIST / 8) {
+                        expected[(ly * lists_x + lx) as usize].push(t as u32);
+                    }
+                }
+            }
+        }
+        let (mut pairs, mut differ) = (0usize, 0usize);
+        for (i, (got, want)) in lists.iter().zip(&expected).enumerate() {
+            let got = got.as_ref().expect("no list overflows on the tiny scene");
+            pairs += want.len();
+            let (g, e): (std::collections::BTreeSet<u32>, std::collections::BTreeSet<u32>) =
+                (got.iter().copied().collect(), want.iter().copied().collect());
+            assert_eq!(g.len(), got.len(), "list {i}: a triangle entered twice");
+            for t in g.symmetric_difference(&e) {
+                differ += 1;
+                assert!(borderline.contains(t), "list {i}: triangle {t} differs ({light:?})");
+            }
+        }
+        eprintln!("{light:?}: {pairs} pairs, {differ} borderline differences");
+        assert!(pairs > 1000, "{pairs} pairs: the test needs silhouettes");
+        assert!(differ * 100 <= pairs, "{differ} of {pairs} pairs differ");
+    }
+}
+
 /// On the tiny scene (96x96 pixels, focused 256² map), the 32-sample
 /// visibility of the antialiased lookup is within 0.006 mean absolute error
 /// of the ray-cast coverage truth and under 0.3x the standard lookup's
 /// error (measured with facets on the triangles' planes: 0.0036 against
 /// 0.0258 for the sun, 0.0032 against 0.0147 for the point light; 0.0060
 /// and 0.0047 on the interpolated normals); its shadow bits are the
-/// standard lookup's.
+/// standard lookup's. Every light kind: a sun, a point light and a spot
+/// light whose cone edge crosses the floor in view (the passes ignore the
+/// cone; the truth counts only sub-samples inside it); the spot within
+/// 0.008 (measured 0.0059 against the standard lookup's 0.0287).
 #[test]
 fn visibility_matches_the_coverage_truth() {
     let Some((device, queue)) = gpu() else { return };
@@ -163,7 +236,9 @@ fn visibility_matches_the_coverage_truth() {
     let cam = camera(96);
     let caster = RayCaster::new(&scene);
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
-    for light in test_lights() {
+    let spot_at = DVec3::new(-8.0, 30.0, 12.0);
+    let spot = Light::spot(spot_at, -spot_at, 20f64.to_radians());
+    for light in test_lights().into_iter().chain([spot]) {
         let m = matrices(&scene, &cam, &[light], 256, &Parameterization::Focused)[0];
         let truth = caster.trace_masks(&cam, &[light], 96, 96);
         let coverage = Coverage::trace(&caster, &cam, &light, &truth);
@@ -180,10 +255,19 @@ fn visibility_matches_the_coverage_truth() {
         assert!(stats.exact_pixels > 50, "{stats:?}");
         assert_eq!(stats.overflow_pixels, 0);
         assert!(e_aa < 0.3 * e_std, "aa32 {e_aa} against standard {e_std}");
-        assert!(e_aa < 0.006, "aa32 {e_aa}");
+        let bound = if matches!(light, Light::Spot { .. }) { 0.008 } else { 0.006 };
+        assert!(e_aa < bound, "aa32 {e_aa}");
         // Partial pixels exist: the words are not all-or-nothing.
         let partial = occlusion.iter().filter(|&&w| w != 0 && w != u32::MAX).count();
         assert!(partial > 20, "{partial} partial pixels");
+        // Only pixels on the exact path may leave the standard bit: every
+        // other word is the depth compare's bit in every sample.
+        let off = occlusion
+            .iter()
+            .zip(&standard.shadow)
+            .filter(|&(&w, &s)| w != if s & 1 != 0 { u32::MAX } else { 0 })
+            .count();
+        assert!(off >= partial && off <= stats.exact_pixels as usize, "{off} words off the standard bit, {stats:?}");
     }
 }
 

@@ -37,6 +37,42 @@ pub struct MethodSummary {
     /// Mean absolute visibility error per counted pixel against the
     /// coverage truth, pooled over the configurations that have it.
     pub mean_visibility_error: Option<f64>,
+    /// The antialiased lookup's pair lists (`+aaN` methods; from the
+    /// `aa pairs …` notes of `configs.csv`), `None` for other methods.
+    pub aa_lists: Option<AaListUse>,
+}
+
+/// Pair-list use of an antialiased method over a run's configurations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AaListUse {
+    /// Most triangle–tile list entries of one frame (all its lights).
+    pub peak_pairs: u64,
+    /// The configuration of that frame.
+    pub peak_config: usize,
+    /// Pixels that kept the standard bit because their lists overflowed,
+    /// summed over the configurations.
+    pub overflow_pixels: u64,
+    /// Pixels that kept the standard bit because their footprint was too
+    /// wide (or their scan was cut), summed over the configurations.
+    pub wide_pixels: u64,
+    /// Configurations whose note held the counts.
+    pub configs: usize,
+}
+
+/// Bytes per list entry (a `u32` triangle index).
+pub const AA_PAIR_BYTES: u64 = 4;
+
+/// `(pairs, overflow, wide)` from a note holding
+/// `aa pairs P exact E (uncertain U) overflow O wide W`.
+#[must_use]
+pub fn aa_note_counts(note: &str) -> Option<(u64, u64, u64)> {
+    let rest = &note[note.find("aa pairs ")? + "aa pairs ".len()..];
+    let words: Vec<&str> = rest.split_whitespace().collect();
+    let after = |key: &str| -> Option<u64> {
+        let i = words.iter().position(|w| *w == key)?;
+        words.get(i + 1)?.trim_end_matches([';', ')']).parse().ok()
+    };
+    Some((words.first()?.parse().ok()?, after("overflow")?, after("wide")?))
 }
 
 /// The whole run in numbers.
@@ -128,6 +164,20 @@ pub(super) fn summarize(
                     .then(|| 100.0 * (mean(&values) / optimized_mean - 1.0)),
                 mean_frames: mean(&frames),
                 mean_visibility_error: (pixels > 0).then(|| error / pixels as f64),
+                aa_lists: rows
+                    .iter()
+                    .filter(|r| r.method == m)
+                    .filter_map(|r| Some((r.config, aa_note_counts(&r.note)?)))
+                    .fold(None, |acc: Option<AaListUse>, (config, (pairs, overflow, wide))| {
+                        let mut u = acc.unwrap_or_default();
+                        if u.configs == 0 || pairs > u.peak_pairs {
+                            (u.peak_pairs, u.peak_config) = (pairs, config);
+                        }
+                        u.overflow_pixels += overflow;
+                        u.wide_pixels += wide;
+                        u.configs += 1;
+                        Some(u)
+                    }),
             }
         })
         .collect();
@@ -336,6 +386,29 @@ pub fn markdown(config: &ExperimentConfig, summary: &Summary, pictures: &[(Metho
             config.coverage_samples
         );
     }
+    let lists: Vec<(&MethodSummary, AaListUse)> =
+        summary.methods.iter().filter_map(|m| Some((m, m.aa_lists?))).collect();
+    if !lists.is_empty() {
+        let _ = writeln!(
+            md,
+            "\nPair lists of the antialiased lookups (triangle–tile entries, {AA_PAIR_BYTES} bytes each; a pixel whose lists overflowed keeps the standard bit and is counted):\n"
+        );
+        let _ = writeln!(md, "| method | configs | peak entries per frame | peak MiB | in configuration | overflow pixels | wide pixels |");
+        let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|");
+        for (m, u) in lists {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {:.2} | {} | {} | {} |",
+                m.method.name(),
+                u.configs,
+                u.peak_pairs,
+                (u.peak_pairs * AA_PAIR_BYTES) as f64 / f64::from(1u32 << 20),
+                u.peak_config,
+                u.overflow_pixels,
+                u.wide_pixels
+            );
+        }
+    }
     if let Some(a) = summary.truth_agreement {
         let _ = writeln!(md, "\nRay casting and the focused 4000² map agree on {:.3}% of counted pixels.", 100.0 * a);
     }
@@ -410,5 +483,44 @@ mod tests {
         assert!(
             md.contains("PARTIAL REPORT: 1 of 6 configurations are missing (3)") && md.contains("Warning: a warning")
         );
+        assert!(!md.contains("Pair lists"), "no antialiased method, no pair-list table");
+    }
+
+    /// The pair-list table's counts come from the `aa pairs …` notes: the
+    /// peak over configurations, overflow and wide pixels summed.
+    #[test]
+    fn pair_list_use_is_read_from_the_notes() {
+        assert_eq!(aa_note_counts("aa pairs 17356 exact 3355 (uncertain 12) overflow 0 wide 6"), Some((17356, 0, 6)));
+        assert_eq!(aa_note_counts("fallback; aa pairs 9 exact 1 (uncertain 0) overflow 2 wide 3"), Some((9, 2, 3)));
+        assert_eq!(aa_note_counts("fallback"), None);
+        assert_eq!(aa_note_counts("aa pairs x exact 1"), None);
+        let aa = MethodSpec::parse("focused+aa32").unwrap();
+        let row = |config: usize, method: MethodSpec, note: &str| ConfigRow {
+            config,
+            method,
+            light: [0.0; 3],
+            counted: Some(10),
+            misclassified: Some(1),
+            false_shadow: Some(1),
+            false_lit: Some(0),
+            frames: 1,
+            truth: None,
+            visibility_error: None,
+            note: note.to_owned(),
+        };
+        let rows = [
+            row(0, aa, "aa pairs 100 exact 5 (uncertain 0) overflow 0 wide 1"),
+            row(1, aa, "aa pairs 300 exact 5 (uncertain 0) overflow 4 wide 2"),
+            row(2, aa, "aa pairs 200 exact 5 (uncertain 0) overflow 0 wide 0"),
+            row(0, MethodSpec::FOCUSED, ""),
+        ];
+        let config =
+            ExperimentConfig { methods: vec![MethodSpec::FOCUSED, aa], ..ExperimentConfig::preset(Preset::Quick) };
+        let summary = summarize(&config, &rows, (Vec::new(), Vec::new()), Duration::ZERO, Vec::new());
+        assert_eq!(summary.methods[0].aa_lists, None);
+        let want = AaListUse { peak_pairs: 300, peak_config: 1, overflow_pixels: 4, wide_pixels: 3, configs: 3 };
+        assert_eq!(summary.methods[1].aa_lists, Some(want));
+        let md = markdown(&config, &summary, &[]);
+        assert!(md.contains("| focused+aa32 | 3 | 300 | 0.00 | 1 | 4 | 3 |"), "{md}");
     }
 }

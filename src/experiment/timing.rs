@@ -216,7 +216,16 @@ impl TimingRow {
     /// focused.
     #[must_use]
     pub fn round_ratios(&self, k: usize) -> Vec<f64> {
-        self.blocks[k].iter().zip(&self.blocks[0]).map(|(p, f)| p.as_secs_f64() / f.as_secs_f64()).collect()
+        self.round_ratios_to(k, 0)
+    }
+
+    /// Per-round ratios of pipeline `k` to pipeline `base` (both indices
+    /// into [`pipelines`](Self::pipelines)): block `r` of each was timed in
+    /// round `r`, so they pair up as [`round_ratios`](Self::round_ratios)
+    /// do (e.g. `focused + ss32` against `focused + aa32`).
+    #[must_use]
+    pub fn round_ratios_to(&self, k: usize, base: usize) -> Vec<f64> {
+        self.blocks[k].iter().zip(&self.blocks[base]).map(|(p, b)| p.as_secs_f64() / b.as_secs_f64()).collect()
     }
 
     /// Mean optimized / focused process CPU time per frame.
@@ -573,6 +582,26 @@ pub fn timing_markdown(rows: &[TimingRow]) -> String {
             median(&mut cells)
         ));
     }
+    // Every later lookup against every earlier one, per cell (their map
+    // sizes differ): e.g. the supersampled baseline against the
+    // antialiased lookup, paired by round like the ratios to focused.
+    let names: Vec<&str> = rows[0].focused_lookups.iter().map(|(l, _)| l.name()).collect();
+    for (i, a) in names.iter().enumerate() {
+        for (j, b) in names.iter().enumerate().skip(i + 1) {
+            let cells: Vec<String> = rows
+                .iter()
+                .map(|r| {
+                    let e = RatioEstimate::from_ratios(&r.round_ratios_to(BASE_PIPELINES + j, BASE_PIPELINES + i))
+                        .map_or_else(|| "-".to_owned(), |e| e.to_string());
+                    format!("{} lights {}²: {e}", r.lights, r.map)
+                })
+                .collect();
+            md.push_str(&format!(
+                "- (focused + {b}) / (focused + {a}), paired rounds per cell: {}\n",
+                cells.join("; ")
+            ));
+        }
+    }
     let mut cpu: Vec<f64> = rows.iter().filter_map(TimingRow::optimized_cpu_ratio).collect();
     if !cpu.is_empty() {
         md.push_str(&format!(
@@ -626,4 +655,40 @@ fn stages_markdown(rows: &[TimingRow]) -> String {
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::subpixel::AaSamples;
+
+    /// Lookups are paired against each other round by round: aa32 blocks
+    /// 2 and 4 ms, ss32 8 and 8 ms give per-round ratios 4 and 2, whose
+    /// geometric mean is √8.
+    #[test]
+    fn lookups_pair_with_each_other_by_round() {
+        let ms = |v: &[u64]| v.iter().map(|&m| Duration::from_millis(m)).collect::<Vec<_>>();
+        let (aa, ss) = (ShadowLookup::SubPixelAa(AaSamples::X32), ShadowLookup::Supersampled(AaSamples::X32));
+        let row = TimingRow {
+            lights: 1,
+            map: 256,
+            focused: Duration::from_millis(1),
+            lispsm: Duration::from_millis(1),
+            optimized: Duration::from_millis(1),
+            focused_with_analysis: Duration::from_millis(1),
+            focused_lookups: vec![(aa, Duration::from_millis(3)), (ss, Duration::from_millis(8))],
+            blocks: vec![ms(&[1, 1]), ms(&[1, 1]), ms(&[1, 1]), ms(&[1, 1]), ms(&[2, 4]), ms(&[8, 8])],
+            rounds: 2,
+            optimizations: 0,
+            analyses: 0,
+            cpu: vec![None; 6],
+            stages: vec![StageTimes::default(); 6],
+        };
+        assert_eq!(row.round_ratios_to(5, 4), vec![4.0, 2.0]);
+        assert_eq!(row.round_ratios(4), vec![2.0, 4.0]);
+        let md = timing_markdown(&[row]);
+        let line = md.lines().find(|l| l.starts_with("- (focused + ss32) / (focused + aa32)")).unwrap();
+        assert!(line.contains("1 lights 256²: 2.828 ("), "{line}");
+        assert!(!md.contains("(focused + aa32) / (focused + ss32)"), "each pair once");
+    }
 }

@@ -202,6 +202,8 @@ struct LastFrame {
     width: u32,
     height: u32,
     lights: usize,
+    /// The list capacity the frame ran with.
+    capacity: u32,
 }
 
 /// Pipelines, the scene's edges and the buffers of the antialiased passes.
@@ -466,7 +468,7 @@ impl AaPass {
             tile_list: buffer(
                 "lixel aa triangle-tile lists, boxes and pixel queue",
                 u64::from(PAIR_CAPACITY) + 8 * triangles + pixels,
-                false,
+                true,
             ),
             // Every light's occlusion words, then every light's validity words.
             occlusion: buffer("lixel aa occlusion and validity words", 2 * pixels * lights, true),
@@ -618,7 +620,7 @@ impl AaPass {
             pass.set_bind_group(1, &group1, &[(i as u64 * PARAM_STRIDE) as u32]);
             pass.dispatch_workgroups_indirect(&self.args, i as u64 * ARGS_STRIDE);
         }
-        self.last = Some(LastFrame { width, height, lights: lights.len() });
+        self.last = Some(LastFrame { width, height, lights: lights.len(), capacity: self.capacity });
     }
 }
 
@@ -702,6 +704,44 @@ impl Renderer {
         let sat = self.read_buffer_words(&sized.map_words, sized.map_texels, texels)?;
         Ok((mask, sat))
     }
+
+    /// Light `light`'s triangle–tile lists of the last antialiased frame,
+    /// for tests: per list tile of [`LIST_TILE`]² texels, row-major
+    /// (`map_width.div_ceil(LIST_TILE)` per row), the triangle indices it
+    /// holds, sorted (the write order comes from atomics). A list whose
+    /// entries did not fit in the capacity is `None` (its pixels keep the
+    /// standard bit). Only the last light's lists survive a frame.
+    ///
+    /// # Errors
+    /// As [`read_silhouette_mask`](Self::read_silhouette_mask).
+    pub fn read_aa_lists(&self, light: usize) -> Result<Vec<Option<Vec<u32>>>, RenderError> {
+        let (last, sized) = self.aa_last()?;
+        if light + 1 != last.lights {
+            return Err(RenderError::NoSuchLight { light, count: last.lights });
+        }
+        let m = &self.last_lights[light].map_size;
+        let n = u64::from(m.width.div_ceil(LIST_TILE)) * u64::from(m.height.div_ceil(LIST_TILE));
+        let counts = self.read_buffer_words(&sized.tile_words, STATS_WORDS, n)?;
+        let offsets = self.read_buffer_words(&sized.tile_words, STATS_WORDS + 2 * sized.tiles, n)?;
+        let total = counts.iter().map(|&c| u64::from(c)).sum::<u64>().min(u64::from(last.capacity));
+        let entries = self.read_buffer_words(&sized.tile_list, 0, total)?;
+        Ok(counts
+            .iter()
+            .zip(&offsets)
+            .map(|(&count, &offset)| {
+                let (start, end) = (offset as usize, offset as usize + count as usize);
+                (end as u64 <= u64::from(last.capacity)).then(|| {
+                    let mut list = entries[start..end].to_vec();
+                    list.sort_unstable();
+                    list
+                })
+            })
+            .collect())
+    }
+
+    /// Side of the triangle–tile lists' tiles in map texels
+    /// ([`read_aa_lists`](Self::read_aa_lists)).
+    pub const AA_LIST_TILE: u32 = LIST_TILE;
 
     fn aa_last(&self) -> Result<(LastFrame, &Sized), RenderError> {
         let aa = self.aa.as_ref().ok_or(RenderError::NothingRendered)?;
