@@ -456,7 +456,7 @@ fn overlay(
                             };
                         }
                         fs_seen += 1;
-                        if fs_examples_left > 0 && fs_seen % 150 == 0 {
+                        if fs_examples_left > 0 && fs_seen.is_multiple_of(150) {
                             fs_examples_left -= 1;
                             let idx = |at: u32| projected[at as usize].0;
                             let area = |t: &lixel::render::sgsm::overlap::Projected| {
@@ -515,7 +515,7 @@ fn overlay(
                                     ""
                                 };
                                 fl_seen += 1;
-                                if near && examples_left > 0 && fl_seen % 150 == 0 {
+                                if near && examples_left > 0 && fl_seen.is_multiple_of(150) {
                                     examples_left -= 1;
                                     let idx = |at: u32| projected[at as usize].0;
                                     let area = |t: &lixel::render::sgsm::overlap::Projected| {

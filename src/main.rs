@@ -395,7 +395,7 @@ fn run_experiment(args: &ExperimentArgs) -> Result<(), String> {
         eprintln!("stability: {} methods and option sets x {} frames...", variants.len(), path.frames);
         let quiet = args.quiet;
         let mut progress = |done: usize, total: usize| {
-            if !quiet && (done % 10 == 0 || done == total) {
+            if !quiet && (done.is_multiple_of(10) || done == total) {
                 eprintln!("  {done}/{total} frames");
             }
         };

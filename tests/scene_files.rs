@@ -222,7 +222,7 @@ fn quad_buffer() -> Vec<u8> {
 
 fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let pad = |mut v: Vec<u8>, fill: u8| {
-        while v.len() % 4 != 0 {
+        while !v.len().is_multiple_of(4) {
             v.push(fill);
         }
         v

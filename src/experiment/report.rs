@@ -516,7 +516,7 @@ mod tests {
         ];
         let config =
             ExperimentConfig { methods: vec![MethodSpec::FOCUSED, aa], ..ExperimentConfig::preset(Preset::Quick) };
-        let summary = summarize(&config, &rows, (Vec::new(), Vec::new()), Duration::ZERO, Vec::new());
+        let summary = summarize(&config, &rows, (Vec::new(), Vec::new(), Vec::new()), Duration::ZERO, Vec::new());
         assert_eq!(summary.methods[0].aa_lists, None);
         let want = AaListUse { peak_pairs: 300, peak_config: 1, overflow_pixels: 4, wide_pixels: 3, configs: 3 };
         assert_eq!(summary.methods[1].aa_lists, Some(want));

@@ -113,7 +113,7 @@ impl Mesh {
                 normals: self.normals.len(),
             });
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(MeshError::PartialTriangle { count: self.indices.len() });
         }
         if let Some(&index) = self.indices.iter().find(|&&i| i as usize >= self.positions.len()) {

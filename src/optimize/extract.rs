@@ -199,9 +199,7 @@ impl Pixels<'_> {
         match self.depth {
             // `(0.0..1.0).contains` on the `f32` is the same test as on its
             // exact `f64`.
-            Depth::Lixel(depth) => {
-                pack_row(&depth[start..][..self.width], bits, mask, |d| (0.0..1.0).contains(&d), push);
-            }
+            Depth::Lixel(depth) => pack_lixel_row(&depth[start..][..self.width], bits, mask, push),
             Depth::Converted(depth) => {
                 pack_row(&depth[start..][..self.width], bits, mask, f64::is_finite, push);
             }
@@ -224,6 +222,122 @@ impl Pixels<'_> {
                 }
             }
         }
+    }
+}
+
+/// [`Pixels::row_words`] over a row of lixel depth (valid in `[0, 1)`):
+/// sixteen pixels a step with SSE2 on x86-64 ([`sse2::pack_row`]), the
+/// portable [`pack_row`] elsewhere. Both give the same words (unit test
+/// `sse2_pack_equals_the_portable_pack`).
+#[inline(always)]
+fn pack_lixel_row(depth: &[f32], bits: &[u32], mask: u32, push: impl FnMut(u64, u64)) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    {
+        #[allow(unsafe_code)]
+        // SAFETY: `sse2::pack_row` requires SSE2 only, and this build has it
+        // (`cfg(target_feature = "sse2")` above; every x86-64 CPU has it). It
+        // takes no pointers: its memory accesses are safe Rust.
+        unsafe {
+            sse2::pack_row(depth, bits, mask, push);
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+    pack_row(depth, bits, mask, |d| (0.0..1.0).contains(&d), push);
+}
+
+/// The per-pixel pass of one light's extraction with SSE2: four pixels a
+/// vector compare, sixteen pixels' bits by one `pmovmskb`. The intrinsics
+/// used take no pointers (the loads are `_mm_setr_*` of array elements,
+/// which LLVM merges into one unaligned load), so the only `unsafe` is the
+/// call into the `#[target_feature]` function ([`pack_lixel_row`]).
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+mod sse2 {
+    use std::arch::x86_64::{
+        __m128i, _mm_and_ps, _mm_and_si128, _mm_andnot_si128, _mm_castps_si128, _mm_cmpeq_epi32, _mm_cmple_ps,
+        _mm_cmplt_ps, _mm_movemask_epi8, _mm_packs_epi16, _mm_packs_epi32, _mm_set1_epi32, _mm_set1_ps, _mm_setr_epi32,
+        _mm_setr_ps, _mm_setzero_ps, _mm_setzero_si128,
+    };
+
+    /// Sixteen pixels: bit `i` of the low half is pixel `i` covered (its
+    /// depth in `[0, 1)`: `0 <= d` and `d < 1`, both false for NaN, as
+    /// `(0.0..1.0).contains`), of the high half covered with a shadow bit in
+    /// `mask`.
+    #[target_feature(enable = "sse2")]
+    #[inline]
+    fn pack16(depth: &[f32; 16], bits: &[u32; 16], mask: __m128i) -> u32 {
+        let (zero, one) = (_mm_setzero_ps(), _mm_set1_ps(1.0));
+        let covered = |i: usize| {
+            let d = _mm_setr_ps(depth[i], depth[i + 1], depth[i + 2], depth[i + 3]);
+            _mm_castps_si128(_mm_and_ps(_mm_cmple_ps(zero, d), _mm_cmplt_ps(d, one)))
+        };
+        let clear = |i: usize| {
+            let b = _mm_setr_epi32(
+                bits[i].cast_signed(),
+                bits[i + 1].cast_signed(),
+                bits[i + 2].cast_signed(),
+                bits[i + 3].cast_signed(),
+            );
+            _mm_cmpeq_epi32(_mm_and_si128(b, mask), _mm_setzero_si128())
+        };
+        // All-ones or zero lanes, narrowed to bytes with saturation (the
+        // same all-ones or zero), in pixel order.
+        let covered =
+            _mm_packs_epi16(_mm_packs_epi32(covered(0), covered(4)), _mm_packs_epi32(covered(8), covered(12)));
+        let clear = _mm_packs_epi16(_mm_packs_epi32(clear(0), clear(4)), _mm_packs_epi32(clear(8), clear(12)));
+        let shadowed = _mm_andnot_si128(clear, covered);
+        _mm_movemask_epi8(covered).cast_unsigned() | _mm_movemask_epi8(shadowed).cast_unsigned() << 16
+    }
+
+    /// [`super::pack_row`] for lixel depth: each run of 64 pixels as one word
+    /// of covered pixels and one of those with a shadow bit in `mask`.
+    #[target_feature(enable = "sse2")]
+    pub(super) fn pack_row(depth: &[f32], bits: &[u32], mask: u32, mut push: impl FnMut(u64, u64)) {
+        let mask = _mm_set1_epi32(mask.cast_signed());
+        let sixteen =
+            |d: &[f32], b: &[u32]| pack16(d.try_into().expect("16 pixels"), b.try_into().expect("16 pixels"), mask);
+        let (mut depth64, mut bits64) = (depth.chunks_exact(64), bits.chunks_exact(64));
+        for (d, b) in (&mut depth64).zip(&mut bits64) {
+            let (mut covered, mut shadowed) = (0u64, 0u64);
+            for (k, (d, b)) in d.chunks_exact(16).zip(b.chunks_exact(16)).enumerate() {
+                let both = sixteen(d, b);
+                covered |= u64::from(both & 0xffff) << (16 * k);
+                shadowed |= u64::from(both >> 16) << (16 * k);
+            }
+            push(covered, shadowed);
+        }
+        // The row's last word, when the row does not end on 64 pixels.
+        let (d, b) = (depth64.remainder(), bits64.remainder());
+        if d.is_empty() {
+            return;
+        }
+        let (mut covered, mut shadowed, mut at) = (0u64, 0u64, 0);
+        let (mut depth16, mut bits16) = (d.chunks_exact(16), b.chunks_exact(16));
+        for (d, b) in (&mut depth16).zip(&mut bits16) {
+            let both = sixteen(d, b);
+            covered |= u64::from(both & 0xffff) << at;
+            shadowed |= u64::from(both >> 16) << at;
+            at += 16;
+        }
+        let rest = depth16.remainder().len();
+        if rest > 0 {
+            // The last `rest` pixels: the row's last sixteen (overlapping
+            // pixels already packed) shifted down to them, or, in a row
+            // narrower than sixteen, the row padded with uncovered pixels
+            // (NaN depth, no shadow bits).
+            let n = depth.len();
+            let both = if n >= 16 {
+                let both = sixteen(&depth[n - 16..], &bits[n - 16..]);
+                (both & 0xffff) >> (16 - rest) | (both >> 16 >> (16 - rest)) << 16
+            } else {
+                let (mut d, mut b) = ([f32::NAN; 16], [0u32; 16]);
+                d[..n].copy_from_slice(depth);
+                b[..n].copy_from_slice(bits);
+                sixteen(&d, &b)
+            };
+            covered |= u64::from(both & 0xffff) << at;
+            shadowed |= u64::from(both >> 16) << at;
+        }
+        push(covered, shadowed);
     }
 }
 
@@ -321,7 +435,7 @@ fn boundary_bits(
         (Some(&c), Some(&s)) => [s, c & !s],
         _ => [0; 2],
     };
-    if w % 64 != 0 {
+    if !w.is_multiple_of(64) {
         // Every word spread with the words before and after it in the
         // buffer, across rows too: a row's pixels end before bit 63 of its
         // last word, so the row before carries in nothing (its bits beyond
@@ -582,10 +696,16 @@ pub(super) fn extract(
                     active &= active - 1;
                     let x = 64 * k + j as usize;
                     let (sx, column) = columns[x];
-                    let (s, b) = ((shadow >> j) as u32 & 1, (mixed >> j) as u32 & 1);
+                    // Active: shadowed, or at a boundary (then also relevant).
+                    let boundary = mixed >> j & 1 != 0;
                     let mut surface = None;
-                    let point = work.point_at((x, y), (sx, sy), row, column, b != 0, |found| surface = found);
-                    work.emit(all, 0, point, surface.as_ref(), s, b);
+                    let point = work.point_at((x, y), (sx, sy), row, column, boundary, |found| surface = found);
+                    let samples = &mut all[0];
+                    match point {
+                        None => samples.counts.rejected_invalid += 1,
+                        Some((here, world)) if boundary => work.boundary(samples, 0, here, world, surface.as_ref()),
+                        Some((here, world)) => work.relevant(samples, 0, here, world),
+                    }
                 }
             }
         }
@@ -788,7 +908,6 @@ impl PixelWork<'_> {
         shadowed_bits: u32,
         mixed_bits: u32,
     ) {
-        let to_light = |rows: &[DVec4; 3], x: DVec4| DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x));
         let Some((here, world)) = point else {
             for bit in set_bits(shadowed_bits | mixed_bits) {
                 all[bit - first].counts.rejected_invalid += 1;
@@ -798,38 +917,55 @@ impl PixelWork<'_> {
         // Each slot's lists are its own, so the slots without a boundary
         // here (only relevant samples) go first, in a loop of their own.
         for bit in set_bits(shadowed_bits & !mixed_bits) {
-            let samples = &mut all[bit - first];
-            samples.relevant.push(to_light(&self.rows[bit], here));
-            samples.relevant_world.push(world);
+            self.relevant(&mut all[bit - first], bit, here, world);
         }
         for bit in set_bits(mixed_bits) {
-            let samples = &mut all[bit - first];
-            let rows = &self.rows[bit];
-            let x_light = to_light(rows, here);
-            samples.relevant.push(x_light);
-            samples.relevant_world.push(world);
-            samples.counts.boundary_candidates += 1;
-            let Some(&found) = surface else {
-                samples.counts.rejected_discontinuity += 1;
-                continue;
-            };
-            let sample = match found {
-                Surface::Given { tx, ty, .. } => {
-                    let along = |t: DVec3| to_light(rows, t.extend(0.0));
-                    BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
-                }
-                Surface::Depth { dx4, dy4, .. } => {
-                    BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
-                }
-            };
-            if !faces_light(samples.problem.light(), world, found.normal(), self.options.min_light_cosine) {
-                samples.counts.rejected_back_facing += 1;
-                continue;
-            }
-            samples.boundary.push(sample);
-            samples.boundary_world.push(world);
+            self.boundary(&mut all[bit - first], bit, here, world, surface);
         }
     }
+
+    /// Slot `slot`'s relevant sample at a pixel where it has no boundary.
+    #[inline(always)]
+    fn relevant(&self, samples: &mut Samples, slot: usize, here: DVec4, world: DVec3) {
+        samples.relevant.push(to_light(&self.rows[slot], here));
+        samples.relevant_world.push(world);
+    }
+
+    /// Slot `slot`'s relevant sample and boundary candidate at a pixel where
+    /// it has a boundary.
+    #[inline(always)]
+    fn boundary(&self, samples: &mut Samples, slot: usize, here: DVec4, world: DVec3, surface: Option<&Surface>) {
+        let rows = &self.rows[slot];
+        let x_light = to_light(rows, here);
+        samples.relevant.push(x_light);
+        samples.relevant_world.push(world);
+        samples.counts.boundary_candidates += 1;
+        let Some(&found) = surface else {
+            samples.counts.rejected_discontinuity += 1;
+            return;
+        };
+        let sample = match found {
+            Surface::Given { tx, ty, .. } => {
+                let along = |t: DVec3| to_light(rows, t.extend(0.0));
+                BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
+            }
+            Surface::Depth { dx4, dy4, .. } => {
+                BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
+            }
+        };
+        if !faces_light(samples.problem.light(), world, found.normal(), self.options.min_light_cosine) {
+            samples.counts.rejected_back_facing += 1;
+            return;
+        }
+        samples.boundary.push(sample);
+        samples.boundary_world.push(world);
+    }
+}
+
+/// A light's `X~ = T [x; w]` from its rows.
+#[inline(always)]
+fn to_light(rows: &[DVec4; 3], x: DVec4) -> DVec3 {
+    DVec3::new(rows[0].dot(x), rows[1].dot(x), rows[2].dot(x))
 }
 
 /// A pixel active for some light, with its world point (its surface, where
@@ -1009,7 +1145,7 @@ pub(super) fn faces_light(light: &Light, p: DVec3, n: DVec3, min_cosine: f64) ->
 
 #[cfg(test)]
 mod tests {
-    use super::{boundary_bits, or_row, pack_bytes};
+    use super::{boundary_bits, or_row, pack_bytes, pack_lixel_row, pack_row};
 
     /// Each row of `src` (`h` rows of `w` items) ORed with the rows above and
     /// below (clamped at the edges), into `dst`.
@@ -1072,6 +1208,88 @@ mod tests {
         assert_eq!(pack_bytes(&[1; 64]), u64::MAX);
     }
 
+    /// The SSE2 pack of a row of lixel depth (what `pack_lixel_row` runs on
+    /// x86-64) gives the portable `pack_row`'s words, and both the
+    /// pixel-by-pixel definition: rows of 1 to 200 pixels (every remainder
+    /// modulo 16 and 64, rows narrower than sixteen), starting anywhere in a
+    /// buffer, with depths at and around the interval's ends (both zeros,
+    /// one, the float below one, subnormals, NaNs of both signs, infinities)
+    /// and random ones, and masks of no bit, one bit, several and all.
+    #[test]
+    fn sse2_pack_equals_the_portable_pack() {
+        let special = [
+            0.0f32,
+            -0.0,
+            1.0,
+            1.0 - f32::EPSILON / 2.0,
+            1.0 + f32::EPSILON,
+            f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::NAN,
+            -f32::NAN,
+            f32::from_bits(0x7fc0_0001),
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -0.5,
+            0.5,
+            2.0,
+            f32::MAX,
+        ];
+        let mut state = 0x6a09_e667_f3bc_c908u64;
+        let mut next = || {
+            state = crate::test_rng::step(state);
+            state
+        };
+        let (mut sse, mut portable) = (Vec::new(), Vec::new());
+        let mut checked = [0usize; 2];
+        for round in 0..3000 {
+            let w = 1 + round % 200;
+            let offset = (next() % 4) as usize;
+            let depth: Vec<f32> = (0..w + offset)
+                .map(|_| {
+                    let r = next();
+                    if r % 4 == 0 {
+                        special[(r >> 8) as usize % special.len()]
+                    } else {
+                        (r >> 11) as f32 / (1u64 << 53) as f32 * 1.5 - 0.25
+                    }
+                })
+                .collect();
+            let bits: Vec<u32> = (0..w + offset).map(|_| next() as u32 & next() as u32).collect();
+            let mask = match next() % 4 {
+                0 => 0,
+                1 => u32::MAX,
+                2 => 1 << (next() % 32),
+                _ => next() as u32,
+            };
+            let (depth, bits) = (&depth[offset..], &bits[offset..]);
+            sse.clear();
+            portable.clear();
+            pack_lixel_row(depth, bits, mask, |c, s| sse.push((c, s)));
+            pack_row(depth, bits, mask, |d| (0.0..1.0).contains(&d), |c, s| portable.push((c, s)));
+            assert_eq!(sse, portable, "width {w}, offset {offset}, mask {mask:#x}");
+            assert_eq!(sse.len(), w.div_ceil(64));
+            for x in 0..w {
+                let covered = (0.0..1.0).contains(&depth[x]);
+                let shadowed = covered && bits[x] & mask != 0;
+                let (c, s) = sse[x / 64];
+                assert_eq!(
+                    (c >> (x % 64) & 1 != 0, s >> (x % 64) & 1 != 0),
+                    (covered, shadowed),
+                    "width {w}, pixel {x}"
+                );
+                checked[usize::from(shadowed)] += 1;
+            }
+            // The bits beyond the row's pixels are clear.
+            let last = sse[sse.len() - 1];
+            if w % 64 != 0 {
+                assert_eq!((last.0 | last.1) >> (w % 64), 0, "width {w}");
+            }
+        }
+        assert!(checked[0] > 10_000 && checked[1] > 10_000, "{checked:?}");
+    }
+
     /// The 3x3 OR with clamped edges, pixel by pixel.
     fn reference(src: &[u64], w: usize, h: usize) -> Vec<u64> {
         let mut out = vec![0; src.len()];
@@ -1099,7 +1317,7 @@ mod tests {
                 let src: Vec<u64> = (0..w * h)
                     .map(|_| {
                         state = crate::test_rng::step(state);
-                        if state % 4 == 0 {
+                        if state.is_multiple_of(4) {
                             1 << (state >> 58)
                         } else {
                             0
@@ -1128,7 +1346,7 @@ mod tests {
                 let pixels: Vec<u64> = (0..w * h)
                     .map(|_| {
                         state = crate::test_rng::step(state);
-                        u64::from(state % 5 == 0)
+                        u64::from(state.is_multiple_of(5))
                     })
                     .collect();
                 let mut packed = vec![0u64; words * h];

@@ -110,7 +110,7 @@ impl ShadowScheduler {
     #[must_use]
     pub fn plan(&self, frame: u64) -> FramePlan {
         let every = u64::from(self.options.optimize_every);
-        if frame % every != 0 {
+        if !frame.is_multiple_of(every) {
             return FramePlan { analysis: None };
         }
         let turns = u64::from(self.options.focused_every);

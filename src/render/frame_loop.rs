@@ -432,7 +432,7 @@ impl ShadowLoop {
         let solving = Instant::now();
         let (matrices, splits) = state.solve(policy, renderer, view)?;
         let solve_time = solving.elapsed();
-        let analysis = (analyses && (force_analysis || self.frame % u64::from(self.optimize_every) == 0))
+        let analysis = (analyses && (force_analysis || self.frame.is_multiple_of(u64::from(self.optimize_every))))
             .then_some(AnalysisRequest { lights: None, tag: 0 });
         let render = self.render(renderer, view, &matrices, analysis)?;
         Ok(LoopFrame {

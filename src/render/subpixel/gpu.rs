@@ -49,7 +49,7 @@ const TILE: u32 = 8;
 /// block of entries per iteration (issue-18 note, session 12).
 const LIST_TILE: u32 = 4;
 // `enter_lists` in the shader writes a tile's list tiles out, at most 2x2.
-const _: () = assert!(TILE % LIST_TILE == 0 && TILE / LIST_TILE <= 2);
+const _: () = assert!(TILE.is_multiple_of(LIST_TILE) && TILE / LIST_TILE <= 2);
 /// Statistics words per light (`STATS_PER_LIGHT`) and their block.
 const STATS_PER_LIGHT: usize = 8;
 const STATS_WORDS: u64 = 256;
