@@ -14,7 +14,10 @@ use lixel::render::ShadowLookup;
 fn timing_runs_every_pipeline_in_paired_rounds() {
     let Some((device, queue)) = render_common::gpu() else { return };
     let config = ExperimentConfig { screen: 96, ..ExperimentConfig::preset(Preset::Quick) };
-    let options = TimingOptions { lights: vec![1, 2], maps: vec![128], frames: 30, ..TimingOptions::default() };
+    // SPSM and SGSM (issue 17: the timing harness includes it) as lookup pipelines.
+    let lookups = vec![ShadowLookup::Spsm(Default::default()), ShadowLookup::Sgsm(Default::default())];
+    let options =
+        TimingOptions { lights: vec![1, 2], maps: vec![128], frames: 30, lookups, ..TimingOptions::default() };
     let mut seen = 0;
     let rows = experiment::run_timing(&config, &options, &device, &queue, |_| seen += 1).unwrap();
     assert_eq!((rows.len(), seen), (2, 2));
@@ -33,20 +36,24 @@ fn timing_runs_every_pipeline_in_paired_rounds() {
         assert!(stages[0].optimize.is_zero() && !stages[2].optimize.is_zero());
         assert!(stages.iter().all(|s| s.shadow.is_none()), "GPU stages are off by default");
         assert!(row.optimized_ratio() > 0.0 && row.optimized_ratio().is_finite());
-        // The lookup pipeline (focused maps, the SPSM lookup by default) pairs with focused too.
-        assert_eq!(row.pipelines().last().map(String::as_str), Some("focused + spsm"));
-        assert_eq!((row.blocks.len(), row.stages.len(), row.cpu.len()), (5, 5, 5));
-        let spsm = row.lookup_ratio(ShadowLookup::Spsm(Default::default())).unwrap();
-        assert!(spsm > 0.0 && spsm.is_finite(), "{row:?}");
+        // The lookup pipelines (focused maps, SPSM and SGSM lookups) pair with focused too.
+        assert_eq!(row.pipelines()[4..], ["focused + spsm", "focused + sgsm"]);
+        assert_eq!((row.blocks.len(), row.stages.len(), row.cpu.len()), (6, 6, 6));
+        for lookup in &options.lookups {
+            let ratio = row.lookup_ratio(*lookup).unwrap();
+            assert!(ratio > 0.0 && ratio.is_finite(), "{row:?}");
+        }
         assert_eq!(row.lookup_ratio(ShadowLookup::DepthCompare), None);
         assert!(RatioEstimate::from_ratios(&row.round_ratios(4)).is_some());
         let estimate = RatioEstimate::from_ratios(&row.round_ratios(2)).unwrap();
         assert!(estimate.interval[0] <= estimate.ratio && estimate.ratio <= estimate.interval[1]);
     }
     let md = experiment::timing_markdown(&rows);
-    assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 2 | 128²")).count(), 2 + 10);
+    assert_eq!(md.lines().filter(|l| l.starts_with("| 1 | 128²") || l.starts_with("| 2 | 128²")).count(), 2 + 12);
     assert!(md.contains("(focused + spsm) / focused: cells median"));
     assert!(md.contains("| focused + spsm ms |") && md.contains("| spsm / focused, paired rounds (95% CI) |"));
+    assert!(md.contains("| focused + sgsm ms |") && md.contains("| sgsm / focused, paired rounds (95% CI) |"));
+    assert!(md.contains("(focused + sgsm) / focused: cells median"));
     assert!(md.contains("scene-optimized / focused: cells median"));
     assert!(md.contains("over 4 paired rounds"));
     assert!(!md.contains("GPU shadow"), "no GPU columns without GPU stages");

@@ -6,13 +6,16 @@
 
 mod render_common;
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use lixel::mesh::RayCaster;
 use lixel::render::sgsm::overlap::{OverlapMap, Projected};
 use lixel::render::sgsm::pattern::{self, MaskWord, Status};
 use lixel::render::sgsm::sweep::{self, SweepMap};
-use lixel::render::{Frame, Renderer, RendererOptions, SgsmOptions, ShadowLookup, SpsmOptions};
-use lixel::Parameterization;
+use lixel::render::{
+    Frame, LoopOptions, LoopPolicy, LoopView, Renderer, RendererOptions, SgsmOptions, ShadowLookup, ShadowLoop,
+    SpsmOptions,
+};
+use lixel::{Parameterization, ShadowMapSize};
 use render_common::*;
 
 const SPSM: ShadowLookup = ShadowLookup::Spsm(SpsmOptions::PAPER);
@@ -281,4 +284,88 @@ fn sgsm_bits_agree_with_ray_cast() {
     assert!(counts[2] < counts[0], "SGSM lowers the standard lookup's error: {counts:?}");
     assert!(paths.own > 0 && paths.full > 0 && paths.pattern > 0 && paths.fallback > 0, "{paths:?}");
     assert!(renderer.take_sgsm_counts().unwrap().unwrap().on_triangles() == 0, "taking resets the counters");
+}
+
+/// SGSM on every other light matrix (normal, snapped focused, PSM,
+/// LiSPSM, plane-optimal) and on the scene-optimized matrices a
+/// [`ShadowLoop`] settles on with SGSM's analysis bits (`optimized+sgsm`):
+/// the tiny scene, every light kind (sun, point, spot), 256² maps. Each
+/// frame runs SGSM's plane paths (counted), agrees with the ray cast away
+/// from boundaries as well as SPSM does (99% where SPSM does: with PSM's
+/// matrices both agree at 97%) and misclassifies at most 1% more pixels
+/// than SPSM. Measured (lavapipe, session 13), misclassified SPSM / SGSM:
+/// normal 358 / 359, snapped 294 / 294, PSM 1366 / 1368, LiSPSM 185 / 185,
+/// plane-optimal 134 / 133, the loop's 102 / 102 — SGSM is not below SPSM
+/// pixel for pixel on every matrix (the issue's goal is on the presets).
+#[test]
+fn sgsm_works_with_every_matrix_and_the_frame_loop() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(128);
+    let mut lights = test_lights();
+    lights.push(lixel::Light::spot(DVec3::new(6.0, 18.0, -9.0), DVec3::new(-6.0, -18.0, 9.0), 35f64.to_radians()));
+    let truth = RayCaster::new(&scene).trace_masks(&camera, &lights, 128, 128);
+    let options = RendererOptions { analysis_size: (48, 48), ..RendererOptions::default() };
+    let mut renderer = Renderer::new(&device, &queue, &scene, options).unwrap();
+    let mut sets: Vec<(String, Vec<lixel::LightMatrix>)> = Parameterization::ALL_DEFAULT
+        .iter()
+        .filter(|p| !matches!(p, Parameterization::Focused))
+        .map(|p| (format!("{:?}", p.method()), matrices(&scene, &camera, &lights, 256, p)))
+        .collect();
+    let view = LoopView { camera: &camera, lights: &lights, bounds: scene.bounds(), map: ShadowMapSize::square(256) };
+    let mut shadows =
+        ShadowLoop::new(LoopPolicy::Optimized, lights.len(), LoopOptions { lookup: SGSM, ..LoopOptions::default() })
+            .unwrap();
+    let settled = shadows.settle(&mut renderer, &view, 4).unwrap();
+    assert!(settled.frames >= 1 && settled.matrices.len() == lights.len(), "{settled:?}");
+    sets.push(("optimized (ShadowLoop with SGSM)".into(), settled.matrices));
+    for (name, m) in &sets {
+        let mut counts = Vec::new();
+        let _ = renderer.take_sgsm_counts();
+        let mut agreements = Vec::new();
+        for lookup in [SPSM, SGSM] {
+            renderer.render(&Frame { masks: true, lookup, ..Frame::new(&camera, m) }).unwrap();
+            let gpu = renderer.read_masks().unwrap();
+            let mut total = 0;
+            for light in 0..lights.len() as u32 {
+                let agreement = truth.agreement_away_from_boundaries(&gpu, light, 1);
+                agreements.push(agreement.fraction());
+                total += gpu.misclassified(&truth, light).unwrap();
+            }
+            counts.push(total);
+        }
+        let paths = renderer.take_sgsm_counts().unwrap().expect("counting");
+        eprintln!(
+            "{name}: misclassified spsm {}, sgsm {}; agreement per light (spsm, then sgsm) {agreements:.4?}; \
+             sgsm paths {paths:?}",
+            counts[0], counts[1]
+        );
+        let (spsm, sgsm) = agreements.split_at(lights.len());
+        for (light, (a, b)) in spsm.iter().zip(sgsm).enumerate() {
+            assert!(*b >= a.min(0.99) - 1e-3, "{name}, light {light}: SGSM agrees {b:.4}, SPSM {a:.4}");
+        }
+        assert!(paths.own > 0 && paths.full + paths.pattern > 0, "{name}: SGSM's plane paths ran: {paths:?}");
+        assert!(counts[1] * 100 <= counts[0] * 101, "{name}: SGSM within 1% of SPSM: {counts:?}");
+    }
+}
+
+/// The detection rate of the CPU reference on the tiny scene (focused 256²
+/// maps, sun and point light): the texels with 2–4 visible triangles are
+/// counted and at least 87% of them recognised (the paper's figure, the
+/// issue's goal); texels with more than four are reported.
+#[test]
+fn detection_rate_on_the_tiny_scene() {
+    let scene = tiny_scene();
+    let camera = walkthrough_camera(128);
+    let lights = test_lights();
+    for (light, m) in matrices(&scene, &camera, &lights, 256, &Parameterization::Focused).iter().enumerate() {
+        let tris = lixel::render::sgsm::overlap::project(&scene, m);
+        let overlap = OverlapMap::new(&tris, 256, 256);
+        let words = overlap.sweep_map(&tris).sweep();
+        let d = lixel::render::sgsm::overlap::detection(&tris, &overlap, &words, 8);
+        let rate = d.rate_2_to_4();
+        eprintln!("light {light}: covered {}, rows (1, 2, 3, 4, >4) {:?}, 2-4 recognised {rate:.4}", d.covered, d.rows);
+        assert!(d.rows[1..4].iter().all(|r| r.texels > 0), "every class occurs: {d:?}");
+        assert!(rate >= 0.87, "light {light}: {rate:.4} of texels with 2-4 visible triangles recognised: {d:?}");
+    }
 }

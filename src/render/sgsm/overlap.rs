@@ -305,3 +305,87 @@ pub fn detection(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::pattern;
+    use super::*;
+
+    /// `n` triangles fanned around the centre of texel (1, 1) of a 3x3 map,
+    /// reaching past the map: all on one plane, or each on its own plane.
+    fn fan(n: usize, planar: bool) -> Vec<(usize, Projected)> {
+        let centre = DVec2::splat(1.5);
+        let at = |k: usize| {
+            let a = 0.3 + std::f64::consts::TAU * k as f64 / n as f64;
+            centre + 6.0 * DVec2::new(a.cos(), a.sin())
+        };
+        (0..n)
+            .map(|k| {
+                let vertices = [centre, at(k), at(k + 1)];
+                let slope = if planar { DVec2::new(0.01, -0.004) } else { DVec2::new(0.01 * (k as f64 + 1.0), 0.0) };
+                (k, Projected { vertices, zeta: vertices.map(|v| 0.5 + slope.dot(v - centre)) })
+            })
+            .collect()
+    }
+
+    /// The overlap map, the CPU sweep's words and the detection table.
+    fn detect(tris: &[(usize, Projected)]) -> (OverlapMap, Vec<MaskWord>, Detection) {
+        let overlap = OverlapMap::new(tris, 3, 3);
+        let words = overlap.sweep_map(tris).sweep();
+        let d = detection(tris, &overlap, &words, 8);
+        (overlap, words, d)
+    }
+
+    /// A texel where `n` fanned triangles meet is in the class of `n`
+    /// visible triangles. One plane is a full texel, recognised whatever
+    /// `n`; separate planes are a pattern of `n` groups up to four (one
+    /// plane per corner) and unrecognised above (a plane reaching no corner).
+    #[test]
+    fn fans_count_in_their_class() {
+        // (Two triangles fanned around a point are degenerate: n from 3.)
+        for n in 3..=7 {
+            for planar in [true, false] {
+                let tris = fan(n, planar);
+                let (overlap, words, d) = detect(&tris);
+                assert_eq!(overlap.lists[4].len(), n, "n {n}: every fan triangle touches the centre texel");
+                assert_eq!(overlap.visible(&tris, [1, 1], 8).len(), n, "n {n}");
+                assert_eq!(d.covered, 9);
+                let word = words[4];
+                match (planar, n) {
+                    (true, _) => assert_eq!(word.status(), Status::Full, "n {n}: {word:?}"),
+                    (false, 3 | 4) => {
+                        assert_eq!(word.status(), Status::Pattern, "n {n}: {word:?}");
+                        assert_eq!(pattern::groups(word.pattern()).unwrap().len(), n, "n {n}: {word:?}");
+                    }
+                    (false, _) => assert_eq!(word.status(), Status::Unrecognised, "n {n}: {word:?}"),
+                }
+                if n >= 5 {
+                    // Only the centre texel sees five or more sectors.
+                    let expected = DetectionRow { texels: 1, recognised: u64::from(planar) };
+                    assert_eq!(d.rows[4], expected, "n {n}, planar {planar}: {d:?}");
+                } else {
+                    let class = d.rows[n - 1];
+                    assert!(class.texels >= 1 && class.recognised >= 1, "n {n}, planar {planar}: {d:?}");
+                }
+            }
+        }
+    }
+
+    /// A small occluder inside a texel, reaching none of its corners, is
+    /// visible there but not recognised: the corners cannot explain it (the
+    /// lookup falls back to SPSM).
+    #[test]
+    fn an_occluder_between_the_corners_is_not_recognised() {
+        let (_, _, without) = detect(&fan(3, true));
+        assert_eq!(without.rows[2], DetectionRow { texels: 1, recognised: 1 }, "{without:?}");
+        let mut tris = fan(3, true);
+        let c = DVec2::splat(1.5);
+        let vertices = [c + DVec2::new(-0.3, -0.2), c + DVec2::new(0.3, -0.2), c + DVec2::new(0.0, 0.3)];
+        tris.push((3, Projected { vertices, zeta: [0.2; 3] }));
+        let (overlap, words, d) = detect(&tris);
+        assert_eq!(overlap.kept[4], Some(3), "the occluder is kept: it is nearest");
+        assert_eq!(overlap.visible(&tris, [1, 1], 8).len(), 4, "the occluder and three fan triangles");
+        assert_eq!(words[4].status(), Status::Unrecognised, "{:?}", words[4]);
+        assert_eq!(d.rows[3], DetectionRow { texels: 1, recognised: 0 }, "{d:?}");
+    }
+}
