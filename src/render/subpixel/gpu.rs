@@ -709,7 +709,7 @@ impl Renderer {
     }
 
     /// Light `light`'s triangle–tile lists of the last antialiased frame,
-    /// for tests: per list tile of [`LIST_TILE`]² texels, row-major
+    /// for tests: per list tile of `LIST_TILE`² (4×4) texels, row-major
     /// (`map_width.div_ceil(LIST_TILE)` per row), the triangle indices it
     /// holds, sorted (the write order comes from atomics). A list whose
     /// entries did not fit in the capacity is `None` (its pixels keep the
