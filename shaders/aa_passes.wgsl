@@ -1213,28 +1213,6 @@ fn on_screen_near(tri: u32, xy: vec2<f32>) -> bool {
     return all(b.xy <= xy + vec2<f32>(1.25)) && all(b.zw >= xy - vec2<f32>(0.25));
 }
 
-// Sub-sample `s`'s position in the pixel (SAMPLE_POSITIONS in
-// subpixel/mod.rs: cell centres of an 8x8 grid with i + j odd, nested: the
-// 8 cells with i + j = 3 (mod 8) by row, then the 8 with 7 (mod 8) by row,
-// then the 16 with 1 (mod 4), two per row, left first).
-fn sample_position(s: u32) -> vec2<f32> {
-    var i: u32;
-    var j: u32;
-    if s < 8u {
-        j = s;
-        i = (3u + 8u - j) & 7u;
-    } else if s < 16u {
-        j = s - 8u;
-        i = (7u + 8u - j) & 7u;
-    } else {
-        j = (s - 16u) >> 1u;
-        let a = (1u + 8u - j) & 7u;
-        let b = (5u + 8u - j) & 7u;
-        i = select(max(a, b), min(a, b), (s & 1u) == 0u);
-    }
-    return (vec2<f32>(f32(i), f32(j)) + 0.5) / 8.0;
-}
-
 // Whether facet point `s` (pixel-local) of a pixel lies inside a spot
 // light's cone (`in_cone`, from the light's position without the facet
 // frame's round trip through world coordinates).
@@ -1265,10 +1243,13 @@ fn cone_samples(cols: array<vec4<f32>, 3>, point: vec3<f32>, light: Light) -> u3
     if corners == 4u {
         return params.sample_mask;
     }
+    // SAMPLE_POSITIONS (subpixel/mod.rs) is prepended by gpu.rs; a
+    // function-scope copy for the runtime index.
+    var positions = SAMPLE_POSITIONS;
     var word = 0u;
     for (var s = 0u; s < 32u; s++) {
         let bit = 1u << s;
-        if (params.sample_mask & bit) != 0u && facet_in_cone(cols, point, light, sample_position(s)) {
+        if (params.sample_mask & bit) != 0u && facet_in_cone(cols, point, light, positions[s]) {
             word |= bit;
         }
     }
@@ -1320,7 +1301,8 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     // The eye in the facet's frame: a triangle between it and the facet
     // hides the samples behind it (the paper's validity mask).
     let e = vec4<f32>(eye, 1.0);
-    // A spot light's cone, per sample (before the scan's loop).
+    // A spot light's cone, per sample (bits of the sample mask; before the
+    // scan's loop).
     let cone = cone_samples(facet.cols, point, light);
     let pixel_xy = vec2<f32>(f32(id % params.width), f32(id / params.width));
     var occluded = 0u;
@@ -1388,10 +1370,9 @@ fn visibility_exact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
     // Every sample hidden: no facet sample to trust; all valid (in the
     // cone; the occlusion as is). No sample in the cone (the pixel's centre
     // is, so only sampling misses the cone): all valid.
-    let in_cone_mask = cone & params.sample_mask;
-    var valid = ~hidden & in_cone_mask;
+    var valid = ~hidden & cone;
     if (occluded & params.sample_mask) == params.sample_mask || valid == 0u {
-        valid = in_cone_mask;
+        valid = cone;
     }
     if valid == 0u {
         valid = params.sample_mask;

@@ -29,7 +29,7 @@ use wgpu::util::DeviceExt;
 
 use super::bitmask::HalfPlaneTable;
 use super::reference::EdgeAdjacency;
-use super::AaSamples;
+use super::{AaSamples, SAMPLE_POSITIONS};
 use crate::mesh::Mesh;
 use crate::render::passes::storage_entry;
 use crate::render::{device, RenderError, Renderer};
@@ -318,12 +318,18 @@ impl AaPass {
             immediate_size: 0,
         });
         // common.wgsl's `shade` calls a lookup's `in_shadow`: a stub here.
+        // The sub-sample positions as the CPU side has them (exact in f32:
+        // cell centres of an 8x8 grid).
+        let positions: Vec<String> =
+            SAMPLE_POSITIONS.iter().map(|p| format!("vec2<f32>({:?}, {:?})", p.x as f32, p.y as f32)).collect();
         let source = format!(
             "{}{}fn in_shadow(light: Light, world: vec3<f32>) -> bool {{ return false; }}\n\
-             const LIST_TILE: u32 = {LIST_TILE}u;\nconst PER_TILE: i32 = {};\n{}",
+             const LIST_TILE: u32 = {LIST_TILE}u;\nconst PER_TILE: i32 = {};\n\
+             const SAMPLE_POSITIONS = array<vec2<f32>, 32>({});\n{}",
             include_str!("../../../shaders/light_depth.wgsl"),
             include_str!("../../../shaders/common.wgsl"),
             TILE / LIST_TILE,
+            positions.join(", "),
             include_str!("../../../shaders/aa_passes.wgsl"),
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
