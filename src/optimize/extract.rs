@@ -703,7 +703,7 @@ pub(super) fn extract(
                     let boundary = mixed >> j & 1 != 0;
                     let mut surface = None;
                     let point = work
-                        .point_at::<true>((x, y), start + x, (sx, sy), row, column, boundary, |found| surface = found);
+                        .point_at::<true>((x, y, start + x), (sx, sy), row, column, boundary, |found| surface = found);
                     let samples = &mut all[0];
                     match point {
                         None => samples.counts.rejected_invalid += 1,
@@ -757,7 +757,7 @@ pub(super) fn extract(
                     continue;
                 }
                 let surfaces = &mut band.surfaces;
-                let point = work.point_at::<false>((x, y), start + x, (sx, sy), row, column, mixed != 0, |found| {
+                let point = work.point_at::<false>((x, y, start + x), (sx, sy), row, column, mixed != 0, |found| {
                     surfaces.push(found)
                 });
                 let (here, world) = point.unwrap_or((DVec4::NAN, DVec3::NAN));
@@ -867,7 +867,7 @@ impl PixelWork<'_> {
     /// `w > 0`, and dehomogenised), and its surface derivatives when some
     /// slot has a boundary there (`mixed`), given to `surface` (`None` at a
     /// depth discontinuity); `None` where the point is not finite or behind
-    /// the eye (and `surface` is not called). `i` is the pixel's index in
+    /// the eye (and `surface` is not called). `i` is pixel `(x, y)`'s index in
     /// the readback's buffers; `row` and `column` are its terms of the
     /// unprojection. (The surface goes to a callback
     /// rather than into the result: a result that large is moved with
@@ -878,8 +878,7 @@ impl PixelWork<'_> {
     #[inline(always)]
     fn point_at<const INLINE: bool>(
         &self,
-        (x, y): (usize, usize),
-        i: usize,
+        (x, y, i): (usize, usize, usize),
         (sx, sy): (f64, f64),
         row: DVec4,
         column: DVec4,
