@@ -63,7 +63,9 @@ const STAT_QUEUE: u32 = 5u;
 const STAT_UNCERTAIN: u32 = 6u;
 // List entries the exact path read (culled or tested).
 const STAT_SCANNED: u32 = 7u;
-const STATS_PER_LIGHT: u32 = 8u;
+// Texels the silhouette mask marked (after the depth check).
+const STAT_SILHOUETTE: u32 = 8u;
+const STATS_PER_LIGHT: u32 = 16u;
 
 struct AaParams {
     light: u32,
@@ -110,7 +112,9 @@ struct AaParams {
     // 1: the hidden test is gated by the triangle's screen box (the
     // default); 0: every tested triangle runs it (for tests).
     gate: u32,
-    _pad0: u32,
+    // 1: the silhouette pass's depth check on (the default); 0: every
+    // texel a silhouette edge crosses is marked (for tests).
+    depth_check: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -141,7 +145,7 @@ struct Edge {
 // The frame's shadow maps (the depth compare's), for `depth_uncertain`.
 @group(1) @binding(10) var shadow_maps: texture_2d_array<f32>;
 
-const STATS_WORDS: u32 = 256u;
+const STATS_WORDS: u32 = 512u;
 
 // The count, cursor and offset of list tile `list` (`list_index`).
 fn count_slot(list: u32) -> u32 {
@@ -203,6 +207,67 @@ fn mark(cell: vec2<i32>) {
     map_words[u32(cell.y) * params.map_w + u32(cell.x)] = 1u;
 }
 
+// The silhouette pass's depth check (Pan et al. 2009, section 3.2): a walked
+// texel is marked only when the edge's nearest linear light depth over the
+// texel (`near`) is not behind the light's depth map by more than
+// DEPTH_CHECK_MARGIN, the map's depth taken as the *largest* over the texel
+// and its eight neighbours. The shadow pass's map (binding 10, the standard
+// depth compare's; the aa passes run after it) holds at each texel centre
+// the depth of the nearest surface there plus the shadow pass's bias, which
+// only moves it away from the light. Conservative, so that a texel bounding
+// a visible shadow edge is not dropped (its pixels would take the standard
+// compare's full lit/shadowed verdict):
+// - the edge's own surface (the front face it bounds, or its neighbour
+//   across the texel) stores at the texel centre, at most half a texel
+//   from the edge point on each axis, its depth there plus its slope-scaled
+//   bias (slope scale 2 by default, unclamped), so at least the edge
+//   point's depth: a visible edge is not behind its own surface;
+// - just beyond a visible edge (outside the surface it bounds) lies
+//   whatever the light sees past it, no nearer than the edge, and of a
+//   texel's 3x3 centres some lie beyond any line through the texel; the
+//   neighbourhood's largest depth sees it (and the map's clear value, 1,
+//   where nothing lies beyond);
+// - a nearer surface that covers only part of the texel has its own
+//   outline crossing the texel, which marks it.
+// Only a texel whose nine centres all see surfaces nearer than every point
+// of the edge inside it is dropped: the edge there is hidden behind
+// something closer to the light, and its shadow edge lies inside that
+// surface's shadow (both sides shadowed). Depths are clamped into [0, 1]
+// like the stored ones, so an edge beyond the map's range is never dropped
+// against the clear value.
+const DEPTH_CHECK_MARGIN: f32 = 1e-5;
+
+// The largest stored depth of `cell` and its eight neighbours (clamped into
+// the map).
+fn neighbourhood_depth(light: Light, cell: vec2<i32>) -> f32 {
+    let last = vec2<i32>(i32(params.map_w) - 1, i32(params.map_h) - 1);
+    var deepest = 0.0;
+    for (var k = 0; k < 9; k++) {
+        let at = clamp(cell + vec2<i32>(k % 3 - 1, k / 3 - 1), vec2<i32>(0), last);
+        deepest = max(deepest, textureLoad(shadow_maps, at, light.layer, 0).x);
+    }
+    return deepest;
+}
+
+// The nearest clamped linear light depth of the world segment a + u (b - a)
+// over u in [ua, ub]: the distance to a point light is convex along the
+// segment (least at the foot of the perpendicular, clamped into the
+// interval), a directional light's depth is linear (least at an end).
+fn segment_near(light: Light, a: vec3<f32>, b: vec3<f32>, ua: f32, ub: f32) -> f32 {
+    let l = light.position;
+    let d = b - a;
+    var near = min(
+        linear_light_depth(l, light.depth.xy, a + d * ua),
+        linear_light_depth(l, light.depth.xy, a + d * ub),
+    );
+    let dd = dot(d, d);
+    if l.w > 0.0 && dd > 0.0 {
+        let foot = clamp(dot(l.xyz - a, d) / dd, ua, ub);
+        near = min(near, linear_light_depth(l, light.depth.xy, a + d * foot));
+    }
+    return clamp(near, 0.0, 1.0);
+}
+
 @compute @workgroup_size(64)
 fn silhouette(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let e = flat_id(gid, groups);
@@ -220,11 +285,19 @@ fn silhouette(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     if c0.w <= W_EPS && c1.w <= W_EPS {
         return;
     }
+    // The world points of c0 and c1 (clip space is affine in world space,
+    // so clipping moves both alike).
+    var w0 = edge.a.xyz;
+    var w1 = edge.b.xyz;
     if c0.w <= W_EPS {
-        c0 = mix(c0, c1, (W_EPS - c0.w) / (c1.w - c0.w));
+        let f = (W_EPS - c0.w) / (c1.w - c0.w);
+        c0 = mix(c0, c1, f);
+        w0 = mix(w0, w1, f);
     }
     if c1.w <= W_EPS {
-        c1 = mix(c1, c0, (W_EPS - c1.w) / (c0.w - c1.w));
+        let f = (W_EPS - c1.w) / (c0.w - c1.w);
+        c1 = mix(c1, c0, f);
+        w1 = mix(w1, w0, f);
     }
     let p0 = to_texel(c0);
     let d = to_texel(c1) - p0;
@@ -263,8 +336,26 @@ fn silhouette(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
         t_max.y = (f32(cell.y) + select(0.0, 1.0, dd.y > 0.0) - q0.y) / dd.y;
     }
     let n = abs(end.x - cell.x) + abs(end.y - cell.y);
-    mark(cell);
-    for (var k = 0; k < n; k++) {
+    // The depth check reads each cell's stretch of the walk [s_in, s_out]
+    // (s along q0 + dd s) grown by a texel's length on each side (f32 ties
+    // at texel corners may step an axis early); s maps to the map
+    // segment's parameter t, then perspective-correctly to the clip (and
+    // world) segment's u.
+    let pad = 1.0 / max(max(abs(dd.x), abs(dd.y)), 1.0);
+    var s_in = 0.0;
+    for (var k = 0; k <= n; k++) {
+        let s_out = select(min(min(t_max.x, t_max.y), 1.0), 1.0, k == n);
+        let ta = t0 + (t1 - t0) * clamp(s_in - pad, 0.0, 1.0);
+        let tb = t0 + (t1 - t0) * clamp(s_out + pad, 0.0, 1.0);
+        let ua = ta * c0.w / ((1.0 - ta) * c1.w + ta * c0.w);
+        let ub = tb * c0.w / ((1.0 - tb) * c1.w + tb * c0.w);
+        if params.depth_check == 0u || segment_near(light, w0, w1, ua, ub) <= neighbourhood_depth(light, cell) + DEPTH_CHECK_MARGIN {
+            mark(cell);
+        }
+        if k == n {
+            break;
+        }
+        s_in = s_out;
         // Every step moves one cell towards `end`; an axis already there
         // never moves (f32 ties at texel corners).
         let move_x = cell.y == end.y || (cell.x != end.x && t_max.x < t_max.y);
@@ -275,8 +366,16 @@ fn silhouette(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
             cell.y += step.y;
             t_max.y += delta.y;
         }
-        mark(cell);
     }
+}
+
+// One invocation before `silhouette`, writing a statistics word that every
+// dispatch's bindings hold read-write: the backend then orders the shadow
+// pass's writes to the maps before the silhouette pass reads them (see
+// `encode` in gpu.rs).
+@compute @workgroup_size(1)
+fn settle() {
+    atomicStore(&tile_words[params.light * STATS_PER_LIGHT + STAT_SILHOUETTE], 0u);
 }
 
 @compute @workgroup_size(64)
@@ -304,6 +403,10 @@ fn sat_cols(@builtin(global_invocation_id) gid: vec3<u32>) {
         let i = y * params.map_w + x;
         run += map_words[params.sat_base + i];
         map_words[params.sat_base + i] = run;
+    }
+    // The last column's sum is the table's corner: every marked texel.
+    if x == params.map_w - 1u {
+        atomicStore(&tile_words[params.light * STATS_PER_LIGHT + STAT_SILHOUETTE], run);
     }
 }
 

@@ -49,7 +49,9 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         sgsm_count(SGSM_PATH_DEPTH_ONLY);
         return spsm_decide(light, k, world, SPSM_PATH_DEPTH_ONLY, own.depth < zeta - SPSM_BIAS);
     }
-    if spsm_inside(own, p) {
+    // The own triangle's parallelogram partner (issue 16, session 14) only
+    // where its plane is in front of p, as in spsm_lookup.wgsl.
+    if spsm_inside(own, p) || (spsm_in_partner(own, p) && sgsm_plane_test(own, p, zeta)) {
         sgsm_count(SGSM_PATH_OWN);
         return spsm_decide(light, k, world, SPSM_PATH_OWN, sgsm_plane_test(own, p, zeta));
     }
@@ -73,7 +75,7 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
                 continue;
             }
             let t = spsm_load(light, k + sgsm_slot_offset(slot));
-            if t.kind == 0u && sgsm_contains(t, p, 0.0) {
+            if t.kind == 0u && (sgsm_contains(t, p, 0.0) || (spsm_in_partner(t, p) && sgsm_plane_test(t, p, zeta))) {
                 // Nearest counting each plane's packing tolerance: shadowed
                 // exactly when some containing plane is in front of p.
                 let plane = spsm_plane_at(t, p);

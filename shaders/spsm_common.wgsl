@@ -133,6 +133,25 @@ const SPSM_FLAG_REACH: f32 = 4.0;
 const SPSM_FACET_AREA: f32 = 2.0;
 // The compact texel's marker: bits 30..26 of word x.
 const SPSM_COMPACT_MARK: u32 = 0x7c000000u;
+// Session 14: a triangle thinner than this in texel space (twice its area
+// over its longest edge) is edge-on to the light and not stored.
+const SPSM_MIN_HEIGHT: f32 = 0.0009765625;
+// The parallelogram partner (spsm_is_partner in spsm_pass.wgsl): how far,
+// per axis in texels, the neighbour's opposite vertex may lie from the
+// completion the lookup rebuilds.
+const SPSM_PARTNER_SLACK: f32 = 0.0078125;
+// A compact texel's edge code for a parallelogram partner too thin for an
+// (h, s) code: h's bits 0 (never a code's), s's 15.
+const SPSM_PARTNER_CODE: u32 = 0xf0u;
+
+// The smallest doubled area (texel space) whose sign tells a full texel's
+// partner mark (spsm_order_offsets, spsm_decode_shape): well above the
+// rounding of the cross product of its offsets.
+fn spsm_partner_margin(d0: vec2<f32>, d1: vec2<f32>, d2: vec2<f32>) -> f32 {
+    let e1 = d1 - d0;
+    let e2 = d2 - d0;
+    return 1e-5 * (dot(e1, e1) + dot(e2, e2));
+}
 
 fn spsm_pack_offset(v: vec2<f32>) -> u32 {
     return pack2x16float(clamp(v, vec2<f32>(-SPSM_MAX_OFFSET), vec2<f32>(SPSM_MAX_OFFSET)));
@@ -355,6 +374,10 @@ struct SpsmTexel {
     // Bits 8k..8k+7: edge v_k -> v_(k+1)'s code (spsm_edge_code; 0: not
     // inner, the mesh does not continue across it on the light's side).
     inner: u32,
+    // The edge k (v_k -> v_(k+1)) across which the mesh's coplanar
+    // neighbour completes the triangle to a parallelogram (session 14,
+    // spsm_in_partner); 3: none.
+    partner: u32,
     // Vertices in absolute texel coordinates.
     v0: vec2<f32>,
     v1: vec2<f32>,
@@ -380,6 +403,7 @@ fn spsm_decode(words: vec4<u32>, texel: vec2<i32>, map_size: vec2<f32>) -> SpsmT
 fn spsm_decode_shape(words: vec4<u32>, texel: vec2<i32>) -> SpsmTexel {
     var out: SpsmTexel;
     out.centre = vec2<f32>(texel) + 0.5;
+    out.partner = 3u;
     out.depth = spsm_decode_depth(words.w >> 16u);
     if (words.w & 0xffffu) == 0u {
         out.kind = select(2u, 1u, words.x == SPSM_DEPTH_ONLY);
@@ -392,12 +416,42 @@ fn spsm_decode_shape(words: vec4<u32>, texel: vec2<i32>) -> SpsmTexel {
         out.v0 = out.centre + spsm_compact_offset(w, 24u);
         out.v1 = out.centre + spsm_compact_offset(w, 46u);
         out.v2 = out.centre + spsm_compact_offset(w, 68u);
+        for (var k = 0u; k < 3u; k++) {
+            if ((out.inner >> (8u * k)) & 0xffu) == SPSM_PARTNER_CODE {
+                out.partner = k;
+            }
+        }
         return out;
     }
-    out.v0 = out.centre + unpack2x16float(words.x);
-    out.v1 = out.centre + unpack2x16float(words.y);
-    out.v2 = out.centre + unpack2x16float(words.z);
+    let d0 = unpack2x16float(words.x);
+    let d1 = unpack2x16float(words.y);
+    let d2 = unpack2x16float(words.z);
+    out.v0 = out.centre + d0;
+    out.v1 = out.centre + d1;
+    out.v2 = out.centre + d2;
+    // The full texel's partner mark (spsm_order_offsets): a positive
+    // orientation of the stored offsets, the partner across v0 -> v1.
+    if SPSM_INNER_EDGES && spsm_cross(d1 - d0, d2 - d0) > spsm_partner_margin(d0, d1, d2) {
+        out.partner = 0u;
+    }
     return out;
+}
+
+// Whether `p` lies in the parallelogram partner of triangle t (session 14):
+// the triangle (a, b, a + b - c) across its partner edge a -> b (closed).
+fn spsm_in_partner(t: SpsmTexel, p: vec2<f32>) -> bool {
+    if t.partner > 2u {
+        return false;
+    }
+    let v = array<vec2<f32>, 3>(t.v0, t.v1, t.v2);
+    let a = v[t.partner];
+    let b = v[(t.partner + 1u) % 3u];
+    let c = v[(t.partner + 2u) % 3u];
+    var q: SpsmTexel;
+    q.v0 = b;
+    q.v1 = a;
+    q.v2 = a + b - c;
+    return spsm_inside(q, p);
 }
 
 // `t` (from spsm_decode_shape of the same words) with its derivatives.

@@ -5,10 +5,14 @@
 // For a receiver p (texel position, depth zeta = z / w of the light matrix):
 // 1. own texel: empty -> lit (conservative rasterization: no triangle
 //    touches the texel); p inside the stored triangle -> its plane decides;
+//    p inside its parallelogram partner (the coplanar mesh neighbour that
+//    completes it to a parallelogram, marked by the pass; session 14) and
+//    behind its plane -> shadowed;
 //    with SPSM_INNER_EDGES, p outside a small one but inside the (grown)
 //    neighbour triangle across one of its inner edges (the caster continues
 //    there; sessions 7 and 9) and far enough behind its plane -> shadowed;
-// 2. the 3x3 neighbourhood: any stored triangle containing p whose plane is
+// 2. the 3x3 neighbourhood: any stored triangle (or its parallelogram
+//    partner, which gives no lit verdict) containing p whose plane is
 //    in front of p -> shadowed; else p on the own triangle's plane (within
 //    the bias and the packing tolerance) -> lit; else p on a neighbour's
 //    stored triangle -> lit (a
@@ -84,6 +88,7 @@ fn spsm_load_shape(light: Light, k: vec2<i32>) -> SpsmTexel {
     if any(k < vec2<i32>(0)) || any(k >= vec2<i32>(light.map_size)) {
         var t: SpsmTexel;
         t.kind = 2u;
+        t.partner = 3u;
         t.centre = vec2<f32>(k) + 0.5;
         return t;
     }
@@ -324,6 +329,10 @@ const SPSM_PATH_DEPTH_ONLY: u32 = 256u;
 // p lies outside the own triangle only across its inner edges and its
 // plane is in front of p (spsm_continues_to).
 const SPSM_PATH_CONTINUED: u32 = 512u;
+// p lies in the own triangle's parallelogram partner (spsm_in_partner,
+// session 14) and its plane is in front of p: shadowed. (Partners give
+// shadowed verdicts only.)
+const SPSM_PATH_PARTNER: u32 = 1024u;
 
 // Largest facet width assumed for an unstored outer facet, in texels.
 const SPSM_FACET_WIDTH: f32 = 1.0;
@@ -375,7 +384,7 @@ fn spsm_continues_to(t: SpsmTexel, p: vec2<f32>) -> bool {
     let v = array<vec2<f32>, 3>(t.v0, t.v1, t.v2);
     for (var k = 0u; k < 3u; k++) {
         let code = (t.inner >> (8u * k)) & 0xffu;
-        if code == 0u {
+        if code == 0u || code == SPSM_PARTNER_CODE {
             continue;
         }
         let a = v[k];
@@ -489,6 +498,13 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
     if spsm_inside(own, p) {
         return spsm_decide(light, k, world, SPSM_PATH_OWN, own_plane.x < zeta - own_slack);
     }
+    // In the partner: shadowed when its plane is in front of p; else the
+    // paths below (a partner lit verdict lost shadows: the partner was not
+    // the nearest surface over p's part of the texel; default preset,
+    // configuration 8).
+    if own_plane.x < zeta - own_slack && spsm_in_partner(own, p) {
+        return spsm_decide(light, k, world, SPSM_PATH_PARTNER, true);
+    }
     if own_plane.x < zeta - own_slack && spsm_continues_to(own, p) && spsm_behind_facet(light, world, own, p, zeta) {
         return spsm_decide(light, k, world, SPSM_PATH_CONTINUED, true);
     }
@@ -516,12 +532,13 @@ fn in_shadow(light: Light, world: vec3<f32>) -> bool {
         let ki = k + vec2<i32>(i32(i % 3u) - 1, i32(i / 3u) - 1);
         if i != 4u {
             t = spsm_load_shape(light, ki);
-            if t.kind == 0u && spsm_inside(t, p) {
+            let inside = t.kind == 0u && spsm_inside(t, p);
+            if inside || (t.kind == 0u && spsm_in_partner(t, p)) {
                 let plane = spsm_plane_at(spsm_slopes(light, t, ki), p);
                 if plane.x < zeta - SPSM_BIAS - SPSM_TOLERANCE * plane.y {
                     return spsm_decide(light, k, world, SPSM_PATH_NEIGHBOUR, true);
                 }
-                on_surface = on_surface || own_clear;
+                on_surface = on_surface || (inside && own_clear);
             }
         }
         if spsm_texel_blocks(light, t, ki, zeta, pattern_slack) {

@@ -71,7 +71,8 @@ struct SpsmVertex {
     // The world position, interpolated (clipped fallback only: its
     // centre-sampled depth, session 6).
     @location(9) world: vec3<f32>,
-    // Edge k's code in bits 8k..8k+7 (spsm_inner_edges).
+    // Edge k's code in bits 8k..8k+7, the parallelogram partner's edge + 1
+    // in bits 24..25 (spsm_inner_edges).
     @location(10) @interpolate(flat) inner: u32,
 }
 
@@ -131,7 +132,9 @@ fn spsm_world_normal(first: u32) -> vec3<f32> {
 // light) or cannot be projected, are not inner. Bits 8k..8k+7: edge k's
 // code (spsm_edge_code, session 9: where the neighbour's opposite vertex
 // lies, moved out by SPSM_CONTINUE_CURVED or SPSM_CONTINUE_FLAT), 0 when
-// not inner.
+// not inner. Bits 24..25 (session 14): the edge k + 1 across which the
+// neighbour completes this triangle to a parallelogram in texel space
+// (spsm_is_partner; the longest such edge), 0 for none.
 fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
     if !SPSM_INNER_EDGES {
         return 0u;
@@ -139,6 +142,8 @@ fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
     var inner = 0u;
     var apex: array<vec2<f32>, 3>;
     var curved = false;
+    var partner = 0u;
+    var partner_length = 0.0;
     let own_normal = spsm_world_normal(first);
     for (var k = 0u; k < 3u; k++) {
         let across = scene_adjacent[first + k];
@@ -157,6 +162,10 @@ fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
         if spsm_cross(e, t[(k + 2u) % 3u] - a) * spsm_cross(e, o - a) < 0.0 {
             inner |= 1u << k;
             apex[k] = o;
+            if spsm_is_partner(first, k, across, own_normal, t, o) && dot(e, e) > partner_length {
+                partner = k + 1u;
+                partner_length = dot(e, e);
+            }
         }
     }
     let scale = select(SPSM_CONTINUE_FLAT, SPSM_CONTINUE_CURVED, curved);
@@ -171,7 +180,25 @@ fn spsm_inner_edges(first: u32, t: array<vec2<f32>, 3>, w_scale: f32) -> u32 {
         let o = apex[k] + (scale - 1.0) * dot(apex[k] - a, n) * n;
         codes |= spsm_edge_code(a, b, o) << (8u * k);
     }
-    return codes;
+    return codes | (partner << 24u);
+}
+
+// Whether the neighbour triangle across edge k (its opposite vertex at index
+// slot `across`, projected to `o`) is this triangle's parallelogram partner
+// (session 14): coplanar in the world (so this triangle's stored plane is
+// also the partner's) and its opposite vertex within SPSM_PARTNER_SLACK
+// texels of the parallelogram completion t_k + t_(k+1) - t_(k+2), which the
+// lookup rebuilds from the stored vertices alone (spsm_in_partner). The two
+// triangles of a planar quad seen by a directional light (a box's faces, a
+// grid); a thin quad's two slivers each hold only part of its width, and
+// each texel keeps one of them.
+fn spsm_is_partner(first: u32, k: u32, across: u32, own_normal: vec3<f32>, t: array<vec2<f32>, 3>, o: vec2<f32>) -> bool {
+    let completion = t[k] + t[(k + 1u) % 3u] - t[(k + 2u) % 3u];
+    if any(abs(o - completion) > vec2<f32>(SPSM_PARTNER_SLACK)) {
+        return false;
+    }
+    let d = spsm_world_of(across) - spsm_world_of(first + k);
+    return abs(dot(own_normal, d)) <= 1e-4 * length(d);
 }
 
 @vertex
@@ -281,6 +308,27 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
     return out;
 }
 
+// The packed offsets x, y, z of a full texel put in the order that carries
+// the parallelogram partner (session 14, spsm_decode_shape): edge
+// `partner` - 1 first (v0 -> v1) and a positive orientation where there is
+// a partner, else a non-positive orientation. The orientation is judged on
+// the decoded offsets, with the lookup's margin spsm_partner_margin twice
+// over (no partner is marked on a triangle too thin to tell).
+fn spsm_order_offsets(words: vec3<u32>, partner: u32) -> vec3<u32> {
+    let d = array<vec2<f32>, 3>(unpack2x16float(words.x), unpack2x16float(words.y), unpack2x16float(words.z));
+    let w = array<u32, 3>(words.x, words.y, words.z);
+    let area2 = spsm_cross(d[1] - d[0], d[2] - d[0]);
+    let margin = spsm_partner_margin(d[0], d[1], d[2]);
+    if partner != 0u && abs(area2) > 2.0 * margin {
+        let k = partner - 1u;
+        let a = w[k];
+        let b = w[(k + 1u) % 3u];
+        let c = w[(k + 2u) % 3u];
+        return select(vec3<u32>(b, a, c), vec3<u32>(a, b, c), area2 > 0.0);
+    }
+    return select(words, vec3<u32>(words.x, words.z, words.y), area2 > 0.0);
+}
+
 // Monotone squeeze of zeta (any real) into the depth buffer's [0, 1].
 fn spsm_depth_key(zeta: f32) -> f32 {
     return 0.5 + 0.5 * zeta / (1.0 + abs(zeta));
@@ -359,6 +407,19 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     if !spsm_box_overlaps(in.t0, in.t1, in.t2, c) {
         discard;
     }
+    // An edge-on triangle (its height in texel space below SPSM_MIN_HEIGHT
+    // and below 1e-4 of its longest edge, so that tiny facets stay: a face
+    // parallel to the light's rays, such as a box's side face under
+    // a light square to it) covers no area a ray could hit, but touches the
+    // texels along its segment. Session 14: stored with its nearest
+    // vertex's depth, it won every texel along a thin box's shadow from the
+    // faces that do cover the receivers (the lookup never finds p inside a
+    // zero-area triangle), so the shadow was lost.
+    let longest = max(length(in.t1 - in.t0), max(length(in.t2 - in.t1), length(in.t0 - in.t2)));
+    let height = abs(spsm_cross(in.t1 - in.t0, in.t2 - in.t0)) / max(longest, 1e-30);
+    if height < SPSM_MIN_HEIGHT && height < 1e-4 * longest {
+        discard;
+    }
     let g = spsm_gradient(in.t0, in.t1, in.t2, in.zeta);
     let lowest = min(in.zeta.x, min(in.zeta.y, in.zeta.z));
     let highest = max(in.zeta.x, max(in.zeta.y, in.zeta.z));
@@ -374,15 +435,25 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
         spsm_store_centre(in, c);
     }
     let reach = max(max(abs(in.t0 - c), abs(in.t1 - c)), abs(in.t2 - c));
+    let codes = in.inner & 0xffffffu;
+    let partner = in.inner >> 24u;
     out.texel = vec4<u32>(
         spsm_pack_offset(in.t0 - c),
         spsm_pack_offset(in.t1 - c),
         spsm_pack_offset(in.t2 - c),
         (spsm_encode_depth(zeta_c) << 16u) | spsm_encode_gradient(g, shadow_pass.clamp.yz),
     );
+    if SPSM_INNER_EDGES {
+        out.texel = vec4<u32>(spsm_order_offsets(out.texel.xyz, partner), out.texel.w);
+    }
     let area2 = abs(spsm_cross(in.t1 - in.t0, in.t2 - in.t0));
-    if SPSM_INNER_EDGES && in.inner != 0u && area2 < SPSM_FACET_AREA && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
-        let w = spsm_pack_compact(in.t0 - c, in.t1 - c, in.t2 - c, in.inner);
+    var compact_codes = codes;
+    if partner != 0u && ((codes >> (8u * (partner - 1u))) & 0xffu) == 0u {
+        // A partner too thin for an edge code (h below 1/16 texel).
+        compact_codes |= SPSM_PARTNER_CODE << (8u * (partner - 1u));
+    }
+    if SPSM_INNER_EDGES && compact_codes != 0u && area2 < SPSM_FACET_AREA && all(reach < vec2<f32>(SPSM_FLAG_REACH)) {
+        let w = spsm_pack_compact(in.t0 - c, in.t1 - c, in.t2 - c, compact_codes);
         out.texel.x = w.x;
         out.texel.y = w.y;
         out.texel.z = w.z;

@@ -45,58 +45,206 @@ fn camera(size: u32) -> Camera {
     walkthrough_camera(size)
 }
 
-/// Every point of every CPU silhouette edge (sampled at 1/8 texel, away
-/// from texel borders) lies in a texel the GPU marked; every marked texel
-/// lies within 1.5 texels of a CPU silhouette edge; the GPU's summed-area
-/// table equals the CPU's over the GPU mask. A directional and a point light.
+/// What [`check_silhouette_mask`] checked: visible silhouette points found
+/// in marked texels, and texels of hidden silhouette edges found unmarked.
+struct MaskCheck {
+    visible_points: usize,
+    dropped_texels: usize,
+}
+
+/// Checks the GPU's silhouette mask of light `light` (the renderer's last
+/// frame, map `m`) against a CPU model that casts rays from the light:
+/// - every point of every CPU silhouette edge (sampled at 1/8 texel, away
+///   from texel borders) that the light sees (no surface nearer than it by
+///   1e-3 world units along its light ray) lies in a marked texel;
+/// - the depth check: a texel is unmarked when every silhouette point in it
+///   is hidden by more than `HIDDEN` world units, no silhouette point within
+///   two texels of it is less hidden, and the first surface the light meets
+///   through each of its nine texel centres (its 3x3 neighbourhood) lies
+///   more than `HIDDEN / 2` nearer than every silhouette point within a
+///   texel of it (the shader compares the edge's nearest depth over the
+///   texel, grown by a texel along the edge, with the neighbourhood's
+///   largest stored depth);
+/// - every marked texel lies within 1.5 texels of a CPU silhouette edge;
+/// - the GPU's summed-area table equals the CPU's over the GPU mask.
+fn check_silhouette_mask(renderer: &Renderer, scene: &Scene, light: &Light, m: &LightMatrix) -> MaskCheck {
+    const HIDDEN: f64 = 0.5;
+    let mesh = merged(scene);
+    let bvh = RayCaster::new(scene);
+    let bvh = bvh.bvh();
+    let (mask, sat) = renderer.read_silhouette_mask(0).unwrap();
+    let (w, h) = (m.map_size.width as usize, m.map_size.height as usize);
+    assert_eq!(sat, summed_area(&mask, w, h), "summed-area table");
+    let l = light.homogeneous_position();
+    // Depth along the light's rays (world units), and the depth of the
+    // first surface on the light ray through world point `p`.
+    let depth = |p: DVec3| if l.w > 0.0 { p.distance(l.truncate()) } else { p.dot(-l.truncate()) };
+    let first_depth = |p: DVec3| -> f64 {
+        let (origin, direction) = if l.w > 0.0 {
+            (l.truncate(), p - l.truncate())
+        } else {
+            let d = -l.truncate().normalize();
+            (p - d * 1000.0, d * 1000.0)
+        };
+        let ray = lixel::mesh::raycast::Ray { origin: origin.as_vec3(), direction: direction.as_vec3() };
+        bvh.closest_hit(&ray, 2.0).map_or(f64::INFINITY, |hit| depth(origin + direction * f64::from(hit.t)))
+    };
+    let world_from_texel = m.texel_from_world().inverse();
+    let centre_depth = |x: i64, y: i64| -> f64 {
+        let (x, y) = (x.clamp(0, w as i64 - 1), y.clamp(0, h as i64 - 1));
+        let p = world_from_texel * glam::DVec4::new(x as f64 + 0.5, y as f64 + 0.5, 0.5, 1.0);
+        first_depth(p.truncate() / p.w)
+    };
+    let world_segments: Vec<[DVec3; 2]> =
+        EdgeAdjacency::new(&mesh).silhouette(&mesh, l).into_iter().map(|[a, b]| [a.as_dvec3(), b.as_dvec3()]).collect();
+    let segments: Vec<[DVec2; 2]> = world_segments
+        .iter()
+        .filter_map(|[a, b]| Some([texel_of(m, a.as_vec3())?, texel_of(m, b.as_vec3())?]))
+        .collect();
+    assert!(segments.len() >= 12, "{} silhouette segments", segments.len());
+    // Every sample point: its texel, its depth and how far it is hidden.
+    let mut samples: Vec<(DVec2, f64, f64)> = Vec::new();
+    for [a, b] in &world_segments {
+        let (Some(ta), Some(tb)) = (texel_of(m, a.as_vec3()), texel_of(m, b.as_vec3())) else { continue };
+        let steps = (ta.distance(tb) * 8.0).ceil().max(1.0) as usize;
+        for k in 0..=steps {
+            let p = a.lerp(*b, k as f64 / steps as f64);
+            let Some(t) = texel_of(m, p.as_vec3()) else { continue };
+            if t.x < 0.0 || t.y < 0.0 || t.x >= w as f64 || t.y >= h as f64 {
+                continue;
+            }
+            samples.push((t, depth(p), depth(p) - first_depth(p)));
+        }
+    }
+    let mut visible_points = 0;
+    for &(p, _, hidden) in &samples {
+        let f = p - p.floor();
+        if hidden > 1e-3 || f.min_element() < 1e-3 || f.max_element() > 1.0 - 1e-3 {
+            continue;
+        }
+        visible_points += 1;
+        let i = p.y as usize * w + p.x as usize;
+        assert_eq!(mask[i], 1, "visible silhouette point {p} in an unmarked texel ({light:?})");
+    }
+    let texel = |p: DVec2| (p.x.floor() as i64, p.y.floor() as i64);
+    let within = |p: DVec2, (x, y): (i64, i64), r: i64| {
+        let (px, py) = texel(p);
+        (px - x).abs() <= r && (py - y).abs() <= r
+    };
+    let mut candidates: Vec<(i64, i64)> = samples.iter().filter(|s| s.2 > HIDDEN).map(|s| texel(s.0)).collect();
+    candidates.sort_unstable();
+    candidates.dedup();
+    let mut dropped_texels = 0;
+    for (x, y) in candidates {
+        if samples.iter().any(|s| s.2 <= HIDDEN && within(s.0, (x, y), 2)) {
+            continue;
+        }
+        let near = samples.iter().filter(|s| within(s.0, (x, y), 1)).map(|s| s.1).fold(f64::INFINITY, f64::min);
+        let deepest =
+            (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (dx, dy))).map(|(dx, dy)| centre_depth(x + dx, y + dy));
+        if deepest.fold(f64::NEG_INFINITY, f64::max) > near - 0.5 * HIDDEN {
+            continue;
+        }
+        dropped_texels += 1;
+        assert_eq!(mask[y as usize * w + x as usize], 0, "texel ({x}, {y}) of a hidden silhouette marked ({light:?})");
+    }
+    let distance_to = |p: DVec2, [a, b]: &[DVec2; 2]| {
+        let d = *b - *a;
+        let t = if d.length_squared() > 0.0 { ((p - *a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+        p.distance(*a + d * t)
+    };
+    let marked: Vec<usize> = (0..mask.len()).filter(|&i| mask[i] != 0).collect();
+    assert!(!marked.is_empty());
+    for &i in &marked {
+        let centre = DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+        let near = segments.iter().map(|s| distance_to(centre, s)).fold(f64::INFINITY, f64::min);
+        assert!(near < 1.5, "texel {centre} marked {near} texels from every silhouette edge ({light:?})");
+    }
+    MaskCheck { visible_points, dropped_texels }
+}
+
+/// The silhouette mask against the CPU model of [`check_silhouette_mask`]
+/// on the tiny scene, a directional and a point light.
 #[test]
 fn silhouette_mask_and_summed_area_match_the_cpu_reference() {
     let Some((device, queue)) = gpu() else { return };
     let scene = tiny_scene();
-    let mesh = merged(&scene);
-    let adjacency = EdgeAdjacency::new(&mesh);
     let cam = camera(64);
     let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
     for light in test_lights() {
         let m = matrices(&scene, &cam, &[light], 96, &Parameterization::Focused)[0];
         renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
-        let (mask, sat) = renderer.read_silhouette_mask(0).unwrap();
-        let (w, h) = (m.map_size.width as usize, m.map_size.height as usize);
-        assert_eq!(sat, summed_area(&mask, w, h), "summed-area table");
-        let segments: Vec<[DVec2; 2]> = adjacency
-            .silhouette(&mesh, light.homogeneous_position())
-            .into_iter()
-            .filter_map(|[a, b]| Some([texel_of(&m, a)?, texel_of(&m, b)?]))
-            .collect();
-        assert!(segments.len() > 20, "{} silhouette segments", segments.len());
-        let mut checked = 0;
-        for [a, b] in &segments {
-            let steps = (a.distance(*b) * 8.0).ceil().max(1.0) as usize;
-            for k in 0..=steps {
-                let p = a.lerp(*b, k as f64 / steps as f64);
-                let f = p - p.floor();
-                let inside = p.x >= 0.0 && p.y >= 0.0 && p.x < w as f64 && p.y < h as f64;
-                if !inside || f.min_element() < 1e-3 || f.max_element() > 1.0 - 1e-3 {
-                    continue;
-                }
-                checked += 1;
-                let i = p.y as usize * w + p.x as usize;
-                assert_eq!(mask[i], 1, "silhouette point {p} in an unmarked texel ({light:?})");
-            }
-        }
-        assert!(checked > 100, "{checked} points checked");
-        let distance_to = |p: DVec2, [a, b]: &[DVec2; 2]| {
-            let d = *b - *a;
-            let t = if d.length_squared() > 0.0 { ((p - *a).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-            p.distance(*a + d * t)
-        };
-        let marked: Vec<usize> = (0..mask.len()).filter(|&i| mask[i] != 0).collect();
-        assert!(!marked.is_empty());
-        for &i in &marked {
-            let centre = DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
-            let near = segments.iter().map(|s| distance_to(centre, s)).fold(f64::INFINITY, f64::min);
-            assert!(near < 1.5, "texel {centre} marked {near} texels from every silhouette edge ({light:?})");
-        }
+        let check = check_silhouette_mask(&renderer, &scene, &light, &m);
+        eprintln!("{light:?}: {} visible points, {} hidden texels", check.visible_points, check.dropped_texels);
+        assert!(check.visible_points > 100, "{} points checked", check.visible_points);
+    }
+}
+
+/// A floor (20 x 20, y = 0), a plate (6 x 0.5 x 6) at y = 8 and a cube (1 x
+/// 1 x 1) at y = 1.5 under the plate's middle: seen from above, the cube's
+/// silhouette lies under the plate, more than two units from its outline.
+fn hidden_cube_scene() -> Scene {
+    use lixel::mesh::primitives::{cuboid, floor};
+    let at = |mesh: Mesh, y: f32| mesh.transformed(&glam::Affine3A::from_translation(Vec3::new(0.0, y, 0.0)));
+    let object =
+        |name: &str, mesh| SceneObject { name: name.into(), mesh, role: Role::CasterAndReceiver, albedo: Vec3::ONE };
+    Scene {
+        objects: vec![
+            object("floor", floor(20.0, 2)),
+            object("plate", at(cuboid(Vec3::new(3.0, 0.25, 3.0), 12), 8.0)),
+            object("cube", at(cuboid(Vec3::splat(0.5), 12), 1.5)),
+        ],
+    }
+}
+
+/// The silhouette pass's depth check: a cube hidden from the light under a
+/// larger plate leaves no texel marked (before the check every texel its
+/// silhouette crossed was: the test then fails on its first hidden texel),
+/// while the plate's outline and the floor's border stay marked
+/// ([`check_silhouette_mask`]). With the check off
+/// (`Renderer::set_aa_depth_check`) every walked texel is marked again: a
+/// superset, at least the hidden texels more. The marked count in
+/// `AaStats::silhouette_texels` equals the mask's. A near-vertical sun and a
+/// point light above.
+#[test]
+fn hidden_silhouettes_are_not_marked() {
+    let Some((device, queue)) = gpu() else { return };
+    let scene = hidden_cube_scene();
+    let cam = Camera::look_at(
+        DVec3::new(4.0, 14.0, 16.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        55f64.to_radians(),
+        glam::UVec2::splat(64),
+        0.5,
+        150.0,
+    )
+    .expect("valid camera");
+    let mut renderer = Renderer::new(&device, &queue, &scene, RendererOptions::default()).unwrap();
+    for light in [Light::directional(DVec3::new(0.15, -1.0, 0.1)), Light::point(DVec3::new(0.5, 30.0, 0.3))] {
+        let m = matrices(&scene, &cam, &[light], 128, &Parameterization::Focused)[0];
+        renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
+        let check = check_silhouette_mask(&renderer, &scene, &light, &m);
+        let kept = renderer.read_aa_stats(0).unwrap().silhouette_texels;
+        let (mask, _) = renderer.read_silhouette_mask(0).unwrap();
+        assert_eq!(kept as usize, mask.iter().filter(|&&t| t != 0).count(), "the marked texels' count");
+        renderer.set_aa_depth_check(false).unwrap();
+        renderer.render(&Frame { lookup: AA32, ..Frame::new(&cam, &[m]) }).unwrap();
+        let (all, _) = renderer.read_silhouette_mask(0).unwrap();
+        let walked = renderer.read_aa_stats(0).unwrap().silhouette_texels;
+        renderer.set_aa_depth_check(true).unwrap();
+        eprintln!(
+            "{light:?}: {} visible points, {} hidden texels; {kept} of {walked} walked texels marked",
+            check.visible_points, check.dropped_texels
+        );
+        assert!(check.visible_points > 100, "{} points checked", check.visible_points);
+        assert!(
+            check.dropped_texels >= 10,
+            "{} hidden texels: the test needs the cube's outline",
+            check.dropped_texels
+        );
+        assert!(mask.iter().zip(&all).all(|(&a, &b)| a <= b), "the check only drops texels");
+        assert!(kept + check.dropped_texels as u32 <= walked, "{kept} + {} > {walked}", check.dropped_texels);
     }
 }
 

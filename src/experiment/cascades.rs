@@ -152,6 +152,7 @@ impl Runner<'_> {
             s.uncertain_pixels += t.uncertain_pixels;
             s.triangle_tests = s.triangle_tests.saturating_add(t.triangle_tests);
             s.entries_scanned = s.entries_scanned.saturating_add(t.entries_scanned);
+            s.silhouette_texels = s.silhouette_texels.saturating_add(t.silhouette_texels);
         }
         Ok(s)
     }

@@ -63,7 +63,8 @@ pub struct AaListUse {
 pub const AA_PAIR_BYTES: u64 = 4;
 
 /// `(pairs, overflow, wide)` from a note holding
-/// `aa pairs P exact E (uncertain U) overflow O wide W`.
+/// `aa pairs P exact E (uncertain U) overflow O wide W` (and, since session
+/// 14, ` silhouette T`: the marked silhouette texels).
 #[must_use]
 pub fn aa_note_counts(note: &str) -> Option<(u64, u64, u64)> {
     let rest = &note[note.find("aa pairs ")? + "aa pairs ".len()..];
@@ -492,6 +493,7 @@ mod tests {
     fn pair_list_use_is_read_from_the_notes() {
         assert_eq!(aa_note_counts("aa pairs 17356 exact 3355 (uncertain 12) overflow 0 wide 6"), Some((17356, 0, 6)));
         assert_eq!(aa_note_counts("fallback; aa pairs 9 exact 1 (uncertain 0) overflow 2 wide 3"), Some((9, 2, 3)));
+        assert_eq!(aa_note_counts("aa pairs 9 exact 1 (uncertain 0) overflow 2 wide 3 silhouette 40"), Some((9, 2, 3)));
         assert_eq!(aa_note_counts("fallback"), None);
         assert_eq!(aa_note_counts("aa pairs x exact 1"), None);
         let aa = MethodSpec::parse("focused+aa32").unwrap();

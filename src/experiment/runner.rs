@@ -481,8 +481,8 @@ impl<'a> Runner<'a> {
             ShadowLookup::SubPixelAa(_) => {
                 let s = self.aa_stats(matrices.len())?;
                 let aa = format!(
-                    "aa pairs {} exact {} (uncertain {}) overflow {} wide {}",
-                    s.pairs, s.exact_pixels, s.uncertain_pixels, s.overflow_pixels, s.wide_pixels
+                    "aa pairs {} exact {} (uncertain {}) overflow {} wide {} silhouette {}",
+                    s.pairs, s.exact_pixels, s.uncertain_pixels, s.overflow_pixels, s.wide_pixels, s.silhouette_texels
                 );
                 if note.is_empty() {
                     aa

@@ -51,8 +51,10 @@ const LIST_TILE: u32 = 4;
 // `enter_lists` in the shader writes a tile's list tiles out, at most 2x2.
 const _: () = assert!(TILE.is_multiple_of(LIST_TILE) && TILE / LIST_TILE <= 2);
 /// Statistics words per light (`STATS_PER_LIGHT`) and their block.
-const STATS_PER_LIGHT: usize = 8;
-const STATS_WORDS: u64 = 256;
+const STATS_PER_LIGHT: usize = 16;
+const STATS_WORDS: u64 = 512;
+// Every light of a frame has its statistics words.
+const _: () = assert!(STATS_PER_LIGHT * crate::MAX_LIGHTS <= STATS_WORDS as usize);
 /// Dynamic-offset stride of the per-light parameters.
 const PARAM_STRIDE: u64 = 256;
 /// Workgroup size of the flat passes.
@@ -74,8 +76,8 @@ struct Light { light: u32 }
 
 @compute @workgroup_size(1)
 fn exact_args() {
-    // Word STAT_QUEUE (5) of the light's STATS_PER_LIGHT (8) statistics.
-    let groups = (stats[params.light * 8u + 5u] + 63u) / 64u;
+    // Word STAT_QUEUE (5) of the light's STATS_PER_LIGHT (16) statistics.
+    let groups = (stats[params.light * 16u + 5u] + 63u) / 64u;
     let a = params.light * 4u;
     args[a] = min(groups, 65535u);
     args[a + 1u] = (groups + 65534u) / 65535u;
@@ -115,6 +117,10 @@ pub struct AaStats {
     /// [`triangle_tests`](Self::triangle_tests)): the length of the exact
     /// path's scan, a large part of its cost on lavapipe.
     pub entries_scanned: u32,
+    /// Texels the silhouette mask marked: texels a silhouette edge crosses
+    /// that the depth check kept (it drops a texel where the edge lies
+    /// behind the light's depth map in the texel's whole 3x3 neighbourhood).
+    pub silhouette_texels: u32,
 }
 
 #[repr(C)]
@@ -145,7 +151,8 @@ struct ParamsRaw {
     bias_clamp: f32,
     screen_base: u32,
     gate: u32,
-    _pad: [u32; 3],
+    depth_check: u32,
+    _pad: [u32; 2],
 }
 
 /// One mesh edge for the silhouette pass (`Edge` in the shader).
@@ -211,7 +218,7 @@ pub(crate) struct AaPass {
     group0: wgpu::BindGroupLayout,
     group1: wgpu::BindGroupLayout,
     /// silhouette, sat_rows, sat_cols, tile_count_pass, tile_scan, tile_write, visibility,
-    /// visibility_exact, classify.
+    /// visibility_exact, classify, settle.
     pipelines: Vec<wgpu::ComputePipeline>,
     /// `exact_args` (`ARGS_SHADER`), its bind group layout and the
     /// arguments buffer (ARGS_STRIDE bytes per light).
@@ -238,9 +245,12 @@ pub(crate) struct AaPass {
     /// The screen-box gate of the hidden test (on unless a test turns it
     /// off to compare).
     gate: bool,
+    /// The silhouette pass's depth check (on unless a test turns it off to
+    /// compare).
+    depth_check: bool,
 }
 
-const ENTRY_POINTS: [&str; 9] = [
+const ENTRY_POINTS: [&str; 10] = [
     "silhouette",
     "sat_rows",
     "sat_cols",
@@ -250,6 +260,7 @@ const ENTRY_POINTS: [&str; 9] = [
     "visibility",
     "visibility_exact",
     "classify",
+    "settle",
 ];
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -412,6 +423,7 @@ impl AaPass {
             validity: true,
             uncertain: true,
             gate: true,
+            depth_check: true,
         }
     }
 
@@ -585,7 +597,8 @@ impl AaPass {
                 slope_scale: bias.slope_scale,
                 bias_clamp: bias.clamp,
                 gate: u32::from(self.gate),
-                _pad: [0; 3],
+                depth_check: u32::from(self.depth_check),
+                _pad: [0; 2],
             };
             queue.write_buffer(&self.params, i as u64 * PARAM_STRIDE, bytemuck::bytes_of(&raw));
             encoder.clear_buffer(&sized.map_words, 0, Some(4 * u64::from(mw) * u64::from(mh)));
@@ -606,6 +619,17 @@ impl AaPass {
                 let (x, y) = if groups <= 65_535 { (groups, 1) } else { (65_535, groups.div_ceil(65_535)) };
                 pass.dispatch_workgroups(x, y, 1);
             };
+            // The silhouette pass reads the shadow maps (its depth check). On
+            // GL nothing orders a depth attachment's writes before a compute
+            // read, and llvmpipe rasterizes in the background: the passes'
+            // first dispatch could read a map still being drawn (seen: visible
+            // silhouette texels dropped, and words differing between two
+            // renders of one frame, in 3 of 9 GL runs of tests/render_aa.rs;
+            // none in 6 runs with this dispatch). A storage write before it makes the
+            // backend put a memory barrier between them (glMemoryBarrier,
+            // which on llvmpipe waits for the rendering); elsewhere an
+            // ordinary barrier between two dispatches.
+            flat(&mut pass, 9, 1);
             flat(&mut pass, 0, self.edge_count);
             flat(&mut pass, 1, mh);
             flat(&mut pass, 2, mw);
@@ -684,7 +708,7 @@ impl Renderer {
         if light >= last.lights {
             return Err(RenderError::NoSuchLight { light, count: last.lights });
         }
-        let w = self.read_buffer_words(&sized.tile_words, (light * STATS_PER_LIGHT) as u64, 8)?;
+        let w = self.read_buffer_words(&sized.tile_words, (light * STATS_PER_LIGHT) as u64, 9)?;
         Ok(AaStats {
             pairs: w[0],
             exact_pixels: w[1],
@@ -693,6 +717,7 @@ impl Renderer {
             triangle_tests: w[4],
             uncertain_pixels: w[6],
             entries_scanned: w[7],
+            silhouette_texels: w[8],
         })
     }
 
@@ -860,6 +885,21 @@ impl Renderer {
         self.ensure_aa()?;
         if let Some(aa) = self.aa.as_mut() {
             aa.gate = on;
+        }
+        Ok(())
+    }
+
+    /// Turns the silhouette pass's depth check on (the default: a texel
+    /// whose silhouette edges all lie behind the light's depth map in its
+    /// 3x3 neighbourhood is not marked) or off (every texel a silhouette
+    /// edge crosses is marked, as before the check), for comparisons.
+    ///
+    /// # Errors
+    /// As [`set_aa_footprint_culling`](Self::set_aa_footprint_culling).
+    pub fn set_aa_depth_check(&mut self, on: bool) -> Result<(), RenderError> {
+        self.ensure_aa()?;
+        if let Some(aa) = self.aa.as_mut() {
+            aa.depth_check = on;
         }
         Ok(())
     }
