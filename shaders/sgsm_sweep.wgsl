@@ -55,23 +55,34 @@ fn sgsm_fetch(k: vec2<i32>) -> SgsmStored {
 // (dy + 1) * 3 + dx + 1, as sgsm_slot_offset. Every texel a step reads (its
 // own, the 3x3 slots, the four corners' 2x2 texels) lies in it, so a step
 // decodes only the three texels of the column entering the window instead
-// of ~30. Same words bit for bit; on lavapipe the frame time did not change
-// measurably (issue 17 note, session 6): the sweep is not SGSM's main cost.
+// of ~30. Same words bit for bit (issue 17 note, session 6; the sweep is
+// about a third of SGSM's frame on lavapipe, session 12).
 var<private> sgsm_window: array<SgsmStored, 9>;
 var<private> sgsm_window_centre: vec2<i32>;
 
 fn sgsm_at(k: vec2<i32>) -> SgsmStored {
-    let d = k - sgsm_window_centre;
-    return sgsm_window[(d.y + 1) * 3 + d.x + 1];
+    return sgsm_window[sgsm_window_slot(k)];
+}
+
+// The window's slot of texel k: a ring over columns (session 14), column x
+// in ring column (x + 3) % 3 (x >= -1), so a step overwrites the column that
+// left the window instead of shifting the other two (six decoded texels
+// copied per step; the corners index the window by data, so it likely sits
+// in per-lane scratch memory on lavapipe and llvmpipe). Same words; the
+// sweep's CPU time per frame at 1000² fell by a fifth to a third (issue-17
+// note, session 14). Indexing the window by constants only was slower.
+fn sgsm_window_slot(k: vec2<i32>) -> i32 {
+    return (k.y - sgsm_window_centre.y + 1) * 3 + (k.x + 3) % 3;
 }
 
 // Centres the window on (x, y): the first texel of a row decodes all nine,
-// each later one shifts the columns left and decodes the new right column.
+// each later one decodes the new right column into the left one's place.
 fn sgsm_window_load(x: i32, y: i32) {
     sgsm_window_centre = vec2<i32>(x, y);
     for (var dy = 0; dy < 3; dy++) {
         for (var dx = 0; dx < 3; dx++) {
-            sgsm_window[dy * 3 + dx] = sgsm_fetch(vec2<i32>(x + dx - 1, y + dy - 1));
+            let k = vec2<i32>(x + dx - 1, y + dy - 1);
+            sgsm_window[sgsm_window_slot(k)] = sgsm_fetch(k);
         }
     }
 }
@@ -79,9 +90,8 @@ fn sgsm_window_load(x: i32, y: i32) {
 fn sgsm_window_step() {
     sgsm_window_centre.x += 1;
     for (var dy = 0; dy < 3; dy++) {
-        sgsm_window[dy * 3] = sgsm_window[dy * 3 + 1];
-        sgsm_window[dy * 3 + 1] = sgsm_window[dy * 3 + 2];
-        sgsm_window[dy * 3 + 2] = sgsm_fetch(sgsm_window_centre + vec2<i32>(1, dy - 1));
+        let k = sgsm_window_centre + vec2<i32>(1, dy - 1);
+        sgsm_window[sgsm_window_slot(k)] = sgsm_fetch(k);
     }
 }
 
