@@ -43,10 +43,8 @@
 //! the experiment harness behind it (`lixel::experiment`, with clap and
 //! indicatif); an engine needs only `render`.
 
-// Two `unsafe` in the crate: the call into the SSE2 pack of the sample
-// extraction (`optimize::extract`, where SSE2 is part of the build's target),
-// and the call into the FMA-compiled exact cross product
-// (`geometry::accurate_cross`, where the CPU was found to have FMA).
+// One `unsafe` in the crate: the call into the SSE2 pack of the sample
+// extraction (`optimize::extract`, where SSE2 is part of the build's target).
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 

@@ -60,36 +60,8 @@ pub fn default_eps(scale: f64) -> f64 {
 /// makes planes through nearly collinear points backward stable: the plane
 /// passes within rounding of all three points even when its normal is
 /// ill-conditioned.
-///
-/// A fused multiply-add is exactly rounded whether the CPU does it or a
-/// library routine does, so the result is the same bits either way. Where
-/// the build's target lacks FMA (x86-64's baseline does not have it) but
-/// the CPU has it, the instruction is used instead of a library call per
-/// product (six per cross product, each spilling the caller's registers).
 #[must_use]
-#[inline]
 pub(crate) fn accurate_cross(u: DVec3, v: DVec3) -> DVec3 {
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "fma")))]
-    if std::arch::is_x86_feature_detected!("fma") {
-        #[allow(unsafe_code)]
-        // SAFETY: `accurate_cross_fma` requires FMA only, and the CPU has
-        // it (detected just above). It takes no pointers.
-        return unsafe { accurate_cross_fma(u, v) };
-    }
-    accurate_cross_portable(u, v)
-}
-
-/// [`accurate_cross`] compiled with FMA enabled: the same expression, the
-/// fused multiply-adds as instructions.
-#[cfg(all(target_arch = "x86_64", not(target_feature = "fma")))]
-#[target_feature(enable = "fma")]
-fn accurate_cross_fma(u: DVec3, v: DVec3) -> DVec3 {
-    accurate_cross_portable(u, v)
-}
-
-/// [`accurate_cross`]'s expression.
-#[inline(always)]
-fn accurate_cross_portable(u: DVec3, v: DVec3) -> DVec3 {
     DVec3::new(
         diff_of_products(u.y, v.z, u.z, v.y),
         diff_of_products(u.z, v.x, u.x, v.z),
@@ -98,7 +70,6 @@ fn accurate_cross_portable(u: DVec3, v: DVec3) -> DVec3 {
 }
 
 /// `a*b - c*d` with a single rounding (Kahan).
-#[inline(always)]
 fn diff_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
     let cd = c * d;
     // Exact rounding error of `cd`: `cd - c*d`.
@@ -116,49 +87,6 @@ mod tests {
         assert!(default_eps(0.0) > 0.0);
         assert!(default_eps(f64::NAN) > 0.0);
         assert!(default_eps(-1.0) > 0.0);
-    }
-
-    /// The FMA-instruction path gives the bits of the portable one (whose
-    /// `mul_add` is a library call without FMA in the build's target):
-    /// random components over many magnitudes, nearly parallel pairs
-    /// (cancellation), products that overflow and underflow. Runs where the
-    /// CPU has FMA (the path is not taken elsewhere).
-    #[test]
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "fma")))]
-    fn fma_cross_equals_the_portable_cross() {
-        if !std::arch::is_x86_feature_detected!("fma") {
-            return;
-        }
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
-        let component = |next: &mut dyn FnMut() -> u64| {
-            let r = next();
-            let mantissa = (r >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
-            // Exponents from 2^-600 to 2^600: products under- and overflow.
-            let exponent = ((r & 0x7ff) as i32 % 1201) - 600;
-            mantissa * 2f64.powi(exponent / 2) * 2f64.powi(exponent - exponent / 2)
-        };
-        for i in 0..200_000 {
-            let u = DVec3::new(component(&mut next), component(&mut next), component(&mut next));
-            let v = if i % 3 == 0 {
-                // Nearly parallel to `u`: a few units in the last place off.
-                u.to_array().map(|c| f64::from_bits(c.to_bits().wrapping_add(next() % 5))).into()
-            } else {
-                DVec3::new(component(&mut next), component(&mut next), component(&mut next))
-            };
-            let portable = accurate_cross_portable(u, v);
-            #[allow(unsafe_code)]
-            // SAFETY: the CPU has FMA (checked above).
-            let fused = unsafe { accurate_cross_fma(u, v) };
-            for (p, f) in portable.to_array().into_iter().zip(fused.to_array()) {
-                assert!(p.to_bits() == f.to_bits() || (p.is_nan() && f.is_nan()), "{u} × {v}: {portable} vs {fused}");
-            }
-        }
     }
 
     #[test]
