@@ -658,7 +658,7 @@ impl Renderer {
     /// Light `light`'s occlusion words of the last frame rendered with
     /// [`ShadowLookup::SubPixelAa`](crate::render::ShadowLookup::SubPixelAa):
     /// one per camera pixel (row-major, row 0 at the top), bit `s` set when
-    /// sub-sample `s` of [`SAMPLE_POSITIONS`](super::SAMPLE_POSITIONS) is
+    /// sub-sample `s` of [`SAMPLE_POSITIONS`] is
     /// occluded (only the pattern's bits). Pixels off the exact path hold
     /// their standard shadow bit in every sample bit. Blocks until done.
     ///
