@@ -8,6 +8,7 @@ mod render_common;
 
 use glam::{DVec2, DVec3, UVec2, Vec3};
 use lixel::mesh::{Mesh, RayCaster, Role, Scene, SceneObject};
+use lixel::render::sgsm::overlap::Projected;
 use lixel::render::spsm::packing;
 use lixel::render::{Frame, Renderer, RendererOptions, ShadowLookup, SpsmOptions, StandardFallback};
 
@@ -81,8 +82,10 @@ fn conservative_coverage_matches_the_cpu_reference() {
         let keys = renderer.read_shadow_map(index).unwrap().depth;
         let mut max_min_depth_error = 0.0f64;
         let (w, h) = (m.map_size.width as i64, m.map_size.height as i64);
-        let projected: Vec<[DVec2; 3]> =
-            shapes.iter().map(|t| [texel_of(&m, t[0]), texel_of(&m, t[1]), texel_of(&m, t[2])]).collect();
+        // The shapes in texel space with their post-projective depths (the
+        // CPU reference of the plane and of its consistent minimum depth).
+        let planes: Vec<Projected> = shapes.iter().map(|t| projected(&m, t)).collect();
+        let projected: Vec<[DVec2; 3]> = planes.iter().map(|p| p.vertices).collect();
         let (mut checked, mut max_vertex_error, mut max_depth_error) = (0, 0.0f64, 0.0f64);
         // The decoded gradient against the CPU plane's, relative to the code's bound.
         let mut worst_gradient = 0.0f64;
@@ -120,20 +123,18 @@ fn conservative_coverage_matches_the_cpu_reference() {
                         max_vertex_error = max_vertex_error.max((*a - b).length());
                     }
                     // Depth at the texel centre on the shape's plane, from the CPU.
-                    let plane = plane_depth(&m, &shapes[k], DVec2::new(x as f64 + 0.5, y as f64 + 0.5));
+                    let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    let plane = planes[k].depth_at(c);
                     max_depth_error = max_depth_error.max((plane - d.depth).abs());
                     // The consistent minimum depth: the plane's minimum over the
                     // part of the texel the triangle covers (paper, section 4).
-                    if let Some(cpu) = min_depth_in_texel(&m, &shapes[k], projected[k], [x, y]) {
+                    if let Some(cpu) = planes[k].min_depth_in([x, y]) {
                         let u = 2.0 * f64::from(keys[(y * w + x) as usize]) - 1.0;
                         let gpu = u / (1.0 - u.abs());
                         max_min_depth_error = max_min_depth_error.max((gpu - cpu).abs());
                     }
-                    let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-                    let g = DVec2::new(
-                        plane_depth(&m, &shapes[k], c + DVec2::X) - plane,
-                        plane_depth(&m, &shapes[k], c + DVec2::Y) - plane,
-                    );
+                    let g =
+                        DVec2::new(planes[k].depth_at(c + DVec2::X) - plane, planes[k].depth_at(c + DVec2::Y) - plane);
                     let bound = packing::gradient_error(
                         words[3] & 0xffff,
                         [w as u32, h as u32],
@@ -156,55 +157,13 @@ fn conservative_coverage_matches_the_cpu_reference() {
     }
 }
 
-/// The minimum of `tri`'s plane (post-projective depth) over the part of
-/// texel `[x, y]` it covers: the triangle (texel coordinates `t`) clipped to
-/// the texel's box (Sutherland–Hodgman), the plane's minimum at a vertex of
-/// the clipped polygon; `None` when nothing is left.
-fn min_depth_in_texel(m: &LightMatrix, tri: &[Vec3; 3], t: [DVec2; 3], texel: [i64; 2]) -> Option<f64> {
-    let (lo, hi) =
-        (DVec2::new(texel[0] as f64, texel[1] as f64), DVec2::new(texel[0] as f64 + 1.0, texel[1] as f64 + 1.0));
-    let mut poly = t.to_vec();
-    // Keep the side where `inside(p) >= 0`; each box side in turn.
-    let sides: [Box<dyn Fn(DVec2) -> f64>; 4] = [
-        Box::new(move |p| p.x - lo.x),
-        Box::new(move |p| hi.x - p.x),
-        Box::new(move |p| p.y - lo.y),
-        Box::new(move |p| hi.y - p.y),
-    ];
-    for inside in &sides {
-        let mut out = Vec::new();
-        for k in 0..poly.len() {
-            let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-            let (da, db) = (inside(a), inside(b));
-            if da >= 0.0 {
-                out.push(a);
-            }
-            if (da >= 0.0) != (db >= 0.0) {
-                out.push(a + (b - a) * (da / (da - db)));
-            }
-        }
-        poly = out;
-        if poly.is_empty() {
-            return None;
-        }
-    }
-    poly.iter().map(|&p| plane_depth(m, tri, p)).reduce(f64::min)
-}
-
-/// Post-projective depth at texel position `t` on the plane of `tri`.
-fn plane_depth(m: &LightMatrix, tri: &[Vec3; 3], t: DVec2) -> f64 {
-    let texel_from_world = m.texel_from_world();
-    let p: Vec<DVec3> = tri
-        .iter()
-        .map(|v| {
-            let c = texel_from_world * v.as_dvec3().extend(1.0);
-            let ndc_z = (m.clip_from_world * v.as_dvec3().extend(1.0)).z / c.w;
-            DVec3::new(c.x / c.w, c.y / c.w, ndc_z)
-        })
-        .collect();
-    let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
-    let n = e1.cross(e2);
-    p[0].z - (n.x * (t.x - p[0].x) + n.y * (t.y - p[0].y)) / n.z
+/// `tri` in `m`'s texel space, with the post-projective depth at each vertex.
+fn projected(m: &LightMatrix, tri: &[Vec3; 3]) -> Projected {
+    let zeta = |v: Vec3| {
+        let p = v.as_dvec3().extend(1.0);
+        (m.clip_from_world * p).z / (m.texel_from_world() * p).w
+    };
+    Projected { vertices: tri.map(|v| texel_of(m, v)), zeta: tri.map(zeta) }
 }
 
 /// Packing round trips for every code, and each derivative code's worst
