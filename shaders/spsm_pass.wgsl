@@ -215,6 +215,21 @@ fn vs_shadow(@builtin(vertex_index) slot: u32) -> SpsmVertex {
         return out;
     }
     var t = array<vec2<f32>, 3>(spsm_to_texel(c[0]), spsm_to_texel(c[1]), spsm_to_texel(c[2]));
+    // An edge-on triangle (its height in texel space below SPSM_MIN_HEIGHT
+    // and below 1e-4 of its longest edge, so that tiny facets stay: a face
+    // parallel to the light's rays, such as a box's side face under a light
+    // square to it) covers no area a ray could hit, but touches the texels
+    // along its segment. Session 14: stored with its nearest vertex's depth,
+    // it won every texel along a thin box's shadow from the faces that do
+    // cover the receivers (the lookup never finds p inside a zero-area
+    // triangle), so the shadow was lost. Not drawn: all three corners at one
+    // point outside the clip volume.
+    let span_max = max(length(t[1] - t[0]), max(length(t[2] - t[1]), length(t[0] - t[2])));
+    let height = abs(spsm_cross(t[1] - t[0], t[2] - t[0])) / max(span_max, 1e-30);
+    if height < SPSM_MIN_HEIGHT && height < 1e-4 * span_max {
+        out.clip = vec4<f32>(2.0, 2.0, 0.5, 1.0);
+        return out;
+    }
     out.t0 = t[0];
     out.t1 = t[1];
     out.t2 = t[2];
@@ -405,19 +420,6 @@ fn fs_shadow(in: SpsmVertex) -> SpsmOutput {
     }
     let c = floor(in.clip.xy) + 0.5;
     if !spsm_box_overlaps(in.t0, in.t1, in.t2, c) {
-        discard;
-    }
-    // An edge-on triangle (its height in texel space below SPSM_MIN_HEIGHT
-    // and below 1e-4 of its longest edge, so that tiny facets stay: a face
-    // parallel to the light's rays, such as a box's side face under
-    // a light square to it) covers no area a ray could hit, but touches the
-    // texels along its segment. Session 14: stored with its nearest
-    // vertex's depth, it won every texel along a thin box's shadow from the
-    // faces that do cover the receivers (the lookup never finds p inside a
-    // zero-area triangle), so the shadow was lost.
-    let longest = max(length(in.t1 - in.t0), max(length(in.t2 - in.t1), length(in.t0 - in.t2)));
-    let height = abs(spsm_cross(in.t1 - in.t0, in.t2 - in.t0)) / max(longest, 1e-30);
-    if height < SPSM_MIN_HEIGHT && height < 1e-4 * longest {
         discard;
     }
     let g = spsm_gradient(in.t0, in.t1, in.t2, in.zeta);
