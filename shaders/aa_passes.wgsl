@@ -65,7 +65,8 @@ const STAT_UNCERTAIN: u32 = 6u;
 const STAT_SCANNED: u32 = 7u;
 // Texels the silhouette mask marked (after the depth check).
 const STAT_SILHOUETTE: u32 = 8u;
-const STATS_PER_LIGHT: u32 = 16u;
+// STATS_PER_LIGHT (the words above, per light) and STATS_WORDS (their
+// block, before the tile words) are prepended by src/render/subpixel/gpu.rs.
 
 struct AaParams {
     light: u32,
@@ -144,8 +145,6 @@ struct Edge {
 @group(1) @binding(9) var camera_masks: texture_2d<u32>;
 // The frame's shadow maps (the depth compare's), for `depth_uncertain`.
 @group(1) @binding(10) var shadow_maps: texture_2d_array<f32>;
-
-const STATS_WORDS: u32 = 512u;
 
 // The count, cursor and offset of list tile `list` (`list_index`).
 fn count_slot(list: u32) -> u32 {

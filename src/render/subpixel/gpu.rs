@@ -55,6 +55,13 @@ const STATS_PER_LIGHT: usize = 16;
 const STATS_WORDS: u64 = 512;
 // Every light of a frame has its statistics words.
 const _: () = assert!(STATS_PER_LIGHT * crate::MAX_LIGHTS <= STATS_WORDS as usize);
+
+/// The statistics' layout as WGSL constants, prepended to the passes and to
+/// `ARGS_SHADER` (one source of truth for both languages).
+fn stats_constants() -> String {
+    format!("const STATS_PER_LIGHT: u32 = {STATS_PER_LIGHT}u;\nconst STATS_WORDS: u32 = {STATS_WORDS}u;\n")
+}
+
 /// Dynamic-offset stride of the per-light parameters.
 const PARAM_STRIDE: u64 = 256;
 /// Workgroup size of the flat passes.
@@ -76,8 +83,9 @@ struct Light { light: u32 }
 
 @compute @workgroup_size(1)
 fn exact_args() {
-    // Word STAT_QUEUE (5) of the light's STATS_PER_LIGHT (16) statistics.
-    let groups = (stats[params.light * 16u + 5u] + 63u) / 64u;
+    // Word STAT_QUEUE (5) of the light's STATS_PER_LIGHT statistics
+    // (prepended, as for the passes).
+    let groups = (stats[params.light * STATS_PER_LIGHT + 5u] + 63u) / 64u;
     let a = params.light * 4u;
     args[a] = min(groups, 65535u);
     args[a + 1u] = (groups + 65534u) / 65535u;
@@ -335,11 +343,12 @@ impl AaPass {
             SAMPLE_POSITIONS.iter().map(|p| format!("vec2<f32>({:?}, {:?})", p.x as f32, p.y as f32)).collect();
         let source = format!(
             "{}{}fn in_shadow(light: Light, world: vec3<f32>) -> bool {{ return false; }}\n\
-             const LIST_TILE: u32 = {LIST_TILE}u;\nconst PER_TILE: i32 = {};\n\
+             const LIST_TILE: u32 = {LIST_TILE}u;\nconst PER_TILE: i32 = {};\n{}\
              const SAMPLE_POSITIONS = array<vec2<f32>, 32>({});\n{}",
             include_str!("../../../shaders/light_depth.wgsl"),
             include_str!("../../../shaders/common.wgsl"),
             TILE / LIST_TILE,
+            stats_constants(),
             positions.join(", "),
             include_str!("../../../shaders/aa_passes.wgsl"),
         );
@@ -373,7 +382,7 @@ impl AaPass {
             })),
             module: &device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("lixel aa exact_args"),
-                source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(ARGS_SHADER)),
+                source: wgpu::ShaderSource::Wgsl(Cow::Owned(format!("{}{ARGS_SHADER}", stats_constants()))),
             }),
             entry_point: Some("exact_args"),
             compilation_options: Default::default(),
