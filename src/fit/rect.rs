@@ -216,22 +216,26 @@ const AREA_TIE: f64 = 1e-9;
 /// moves the map continuously. Two caliper passes, no allocation.
 fn caliper_best_edge(hull: &[DVec2]) -> Option<usize> {
     // (A calipers pass visits each edge at most once: a hull of up to 16
-    // vertices fits the smaller array, which is less to clear.)
+    // vertices fits the smaller arrays, which are less to clear.)
     if hull.len() <= 16 {
-        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 16])
+        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 16], &mut [DVec2::ZERO; 16])
     } else {
-        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 32])
+        caliper_best_edge_keeping(hull, &mut [(0, 0.0, 0.0); 32], &mut [DVec2::ZERO; 32])
     }
 }
 
 /// [`caliper_best_edge`] with the first pass's visits kept in `kept` for
 /// the second when they fit (hulls of the classical bodies have a handful
 /// of edges); a longer hull runs the calipers again, which visit the same
-/// edges with the same values.
-fn caliper_best_edge_keeping(hull: &[DVec2], kept: &mut [(usize, f64, f64)]) -> Option<usize> {
+/// edges with the same values. The hull's edge vectors `hull[i + 1] −
+/// hull[i]` go into `edges` once when they fit (the calipers' pointer tests
+/// then load them instead of subtracting two vertices each time: the same
+/// values).
+fn caliper_best_edge_keeping(hull: &[DVec2], kept: &mut [(usize, f64, f64)], edges: &mut [DVec2]) -> Option<usize> {
+    let n = hull.len();
     let mut visits = 0;
     let mut least: Option<(f64, usize)> = None;
-    calipers(hull, |i, area, length| {
+    let mut first_visit = |i: usize, area: f64, length: f64| {
         if least.is_none_or(|(a, _)| area < a) {
             least = Some((area, i));
         }
@@ -239,7 +243,15 @@ fn caliper_best_edge_keeping(hull: &[DVec2], kept: &mut [(usize, f64, f64)]) -> 
             *slot = (i, area, length);
         }
         visits += 1;
-    });
+    };
+    if let Some(edges) = edges.get_mut(..n) {
+        for (i, edge) in edges.iter_mut().enumerate() {
+            *edge = hull[if i + 1 == n { 0 } else { i + 1 }] - hull[i];
+        }
+        calipers(hull, |r| edges[r], &mut first_visit);
+    } else {
+        calipers(hull, |r| hull[if r + 1 == n { 0 } else { r + 1 }] - hull[r], &mut first_visit);
+    }
     let (least_area, least_index) = least?;
     // (Rounding can make a sliver's area slightly negative: the band is
     // measured from the least area either way.)
@@ -255,17 +267,18 @@ fn caliper_best_edge_keeping(hull: &[DVec2], kept: &mut [(usize, f64, f64)]) -> 
             consider(i, area, length);
         }
     } else {
-        calipers(hull, consider);
+        calipers(hull, |r| hull[if r + 1 == n { 0 } else { r + 1 }] - hull[r], consider);
     }
     Some(best.map_or(least_index, |(_, i)| i))
 }
 
 /// Calls `visit(i, area, edge length)` for each hull edge with a finite
-/// flush-rectangle area, by rotating calipers (`O(h)`).
-fn calipers(hull: &[DVec2], mut visit: impl FnMut(usize, f64, f64)) {
+/// flush-rectangle area, by rotating calipers (`O(h)`); `edge(r)` is
+/// `hull[r + 1] − hull[r]` (cyclically).
+fn calipers(hull: &[DVec2], edge: impl Fn(usize) -> DVec2, mut visit: impl FnMut(usize, f64, f64)) {
     let n = hull.len();
     let next = |r: usize| if r + 1 == n { 0 } else { r + 1 };
-    let step = |c: Cyclic| hull[next(c.r)] - hull[c.r];
+    let step = |c: Cyclic| edge(c.r);
 
     // Cyclic vertex indices, never reduced: right-most along the edge,
     // farthest from it, left-most along it. For a CCW polygon they appear in
@@ -548,9 +561,10 @@ mod tests {
         assert_contains_all(&rect, &hull);
     }
 
-    /// Keeping the first caliper pass's visits picks the same edge as
-    /// running the calipers twice, on random hulls of 3 to 60 vertices
-    /// (beyond the kept 32 too), slivers and regular polygons (all tied).
+    /// Keeping the first caliper pass's visits, or the edge vectors, picks
+    /// the same edge as running the calipers twice on the vertices alone,
+    /// on random hulls of 3 to 60 vertices (beyond the kept 32 too), slivers
+    /// and regular polygons (all tied).
     #[test]
     fn kept_caliper_visits_pick_the_edge_of_a_second_pass() {
         let mut random = crate::test_rng::unit(0x853c_49e6_748f_ea9b_u64);
@@ -567,7 +581,12 @@ mod tests {
                     .collect(),
             };
             let hull = convex_hull_2d(&points);
-            assert_eq!(caliper_best_edge(&hull), caliper_best_edge_keeping(&hull, &mut []), "case {case}");
+            let best = caliper_best_edge(&hull);
+            // Neither visits nor edge vectors kept: the calipers' own
+            // subtractions, twice.
+            assert_eq!(best, caliper_best_edge_keeping(&hull, &mut [], &mut []), "case {case}");
+            // The edge vectors kept (up to 64), the visits not.
+            assert_eq!(best, caliper_best_edge_keeping(&hull, &mut [], &mut [DVec2::ZERO; 64]), "case {case}");
         }
     }
 
