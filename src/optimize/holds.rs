@@ -2,7 +2,8 @@
 //! time: each lane does the same operations in the same order as
 //! [`holds_all`] and [`LightMatrix::covers`] (glam's `DMat3 * DVec3` and
 //! `DMat4 * DVec4`, column by column), so each answer is theirs, and the
-//! compiler packs the lanes into vector instructions.
+//! compiler packs the lanes into vector instructions (with AVX where the
+//! CPU has it: the same operations per lane, so the same answers).
 
 use glam::{DMat3, DMat4, DVec3};
 
@@ -15,6 +16,19 @@ const LANES: usize = 4;
 /// [`holds_all`]: `homography` puts every light-coordinate point in front of
 /// the light and inside the map (`|ndc| <= 1 + slack`).
 pub(super) fn holds_all_points(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        #[allow(unsafe_code)]
+        // SAFETY: `avx::holds_all_points` requires AVX only, and this CPU
+        // has it (detected just above). It takes no pointers.
+        return unsafe { avx::holds_all_points(homography, xs, slack) };
+    }
+    holds_all_points_lanes(homography, xs, slack)
+}
+
+/// The body of [`holds_all_points`], for any target features.
+#[inline(always)]
+fn holds_all_points_lanes(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool {
     if !homography.is_finite() {
         return false;
     }
@@ -41,6 +55,18 @@ pub(super) fn holds_all_points(homography: &DMat3, xs: &[DVec3], slack: f64) -> 
 
 /// Every world point `p` has [`LightMatrix::covers`]`(p, slack)`.
 pub(super) fn covers_all(matrix: &LightMatrix, points: &[DVec3], slack: f64) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        #[allow(unsafe_code)]
+        // SAFETY: as in `holds_all_points`.
+        return unsafe { avx::covers_all(matrix, points, slack) };
+    }
+    covers_all_lanes(matrix, points, slack)
+}
+
+/// The body of [`covers_all`], for any target features.
+#[inline(always)]
+fn covers_all_lanes(matrix: &LightMatrix, points: &[DVec3], slack: f64) -> bool {
     let m: &DMat4 = &matrix.clip_from_world;
     let (cx, cy, cz, cw) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
     let bound = 1.0 + slack;
@@ -60,6 +86,24 @@ pub(super) fn covers_all(matrix: &LightMatrix, points: &[DVec3], slack: f64) -> 
         }
     }
     lanes.remainder().iter().all(|&p| matrix.covers(p, slack))
+}
+
+/// The two tests compiled for AVX (called only where the CPU has it).
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use glam::{DMat3, DVec3};
+
+    use crate::LightMatrix;
+
+    #[target_feature(enable = "avx")]
+    pub(super) fn holds_all_points(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool {
+        super::holds_all_points_lanes(homography, xs, slack)
+    }
+
+    #[target_feature(enable = "avx")]
+    pub(super) fn covers_all(matrix: &LightMatrix, points: &[DVec3], slack: f64) -> bool {
+        super::covers_all_lanes(matrix, points, slack)
+    }
 }
 
 #[cfg(test)]
