@@ -323,8 +323,26 @@ fn fold_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 /// lanes' smallest and largest by plain compares (`minpd`), which are
 /// `fold_range`'s bits whenever no value is NaN and neither end is a zero
 /// (the one value whose bits `f64::min` may pick either way, `±0`);
-/// otherwise `fold_range` itself.
+/// otherwise `fold_range` itself. Compiled for AVX where the CPU has it
+/// (the same Rust, so the same compares and the same bits).
 fn range_of(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        #[target_feature(enable = "avx")]
+        fn range_of_avx(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
+            range_of_lanes(a, b, value)
+        }
+        #[allow(unsafe_code)]
+        // SAFETY: `range_of_avx` requires AVX only, and this CPU has it
+        // (detected just above). It takes no pointers.
+        return unsafe { range_of_avx(a, b, value) };
+    }
+    range_of_lanes(a, b, value)
+}
+
+/// The body of [`range_of`], for any target features.
+#[inline(always)]
+fn range_of_lanes(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
     const LANES: usize = 4;
     let mut lo = [f64::INFINITY; LANES];
     let mut hi = [f64::NEG_INFINITY; LANES];
