@@ -46,9 +46,9 @@
 // `unsafe` only to call `#[target_feature]` functions: the SSE2 pack of the
 // sample extraction (`optimize::extract`, where SSE2 is part of the build's
 // target), and the optimizer's loops compiled for AVX where the CPU has it
-// (`optimize::objective`, `optimize::holds`, `optimize::project_onto_plane`:
-// each behind `is_x86_feature_detected!("avx")`, the same Rust as the
-// portable loop it stands for).
+// (`optimize::objective`, `optimize::holds`, `optimize::project_onto_plane`,
+// `matrix::range_of`: each behind `is_x86_feature_detected!("avx")`, the same
+// Rust as the portable loop it stands for).
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
