@@ -78,6 +78,20 @@ const fn across_faces(faces: [[usize; 4]; 6]) -> [[u8; 4]; 6] {
 /// [`across_faces`] of [`BOX_FACES`] and of [`BOX_FACES_REVERSED`].
 const BOX_ACROSS: [[[u8; 4]; 6]; 2] = [across_faces(BOX_FACES), across_faces(BOX_FACES_REVERSED)];
 
+/// The loops of `faces` one after another, as a body's index list holds them.
+const fn flatten(faces: [[usize; 4]; 6]) -> [usize; 24] {
+    let mut out = [0; 24];
+    let mut i = 0;
+    while i < 24 {
+        out[i] = faces[i / 4][i % 4];
+        i += 1;
+    }
+    out
+}
+
+/// [`flatten`] of [`BOX_FACES`] and of [`BOX_FACES_REVERSED`].
+const BOX_INDICES: [[usize; 24]; 2] = [flatten(BOX_FACES), flatten(BOX_FACES_REVERSED)];
+
 /// One face of a [`ConvexPolyhedron`]: an outward plane and a loop of vertex
 /// indices (a view into the body).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -725,7 +739,10 @@ impl ConvexPolyhedron {
     /// scratch.
     fn silhouette(&self, removed: &[bool], edge_faces: &mut HalfEdges, out: &mut Vec<(usize, usize, usize, usize)>) {
         out.clear();
-        if self.silhouette_of_box(removed, out) || self.silhouette_small(removed, out) {
+        // (The size test here, the table out of line: other bodies pay two
+        // compares.)
+        let box_sized = self.vertices.len() == 8 && self.faces.len() == 6;
+        if (box_sized && self.silhouette_of_box(removed, out)) || self.silhouette_small(removed, out) {
             return;
         }
         out.clear();
@@ -748,21 +765,22 @@ impl ConvexPolyhedron {
     /// time ([`BOX_ACROSS`]) instead of the per-call edge lists, so the
     /// same list, appended to `out` (empty before). Returns `false`, `out`
     /// untouched, for any other layout.
+    #[inline(never)]
     fn silhouette_of_box(&self, removed: &[bool], out: &mut Vec<(usize, usize, usize, usize)>) -> bool {
         if self.vertices.len() != 8 || self.faces.len() != 6 || self.indices.len() != 24 || removed.len() < 6 {
             return false;
         }
-        let spans = self.faces.iter().enumerate().all(|(f, face)| face.start == 4 * f && face.end == 4 * f + 4);
-        let same = |loops: &[[usize; 4]; 6]| loops.iter().flatten().eq(self.indices.iter());
-        let (loops, across) = if !spans {
-            return false;
-        } else if same(&BOX_FACES) {
-            (&BOX_FACES, &BOX_ACROSS[0])
-        } else if same(&BOX_FACES_REVERSED) {
-            (&BOX_FACES_REVERSED, &BOX_ACROSS[1])
+        let layout = if self.indices[..] == BOX_INDICES[0] {
+            0
+        } else if self.indices[..] == BOX_INDICES[1] {
+            1
         } else {
             return false;
         };
+        if !self.faces.iter().enumerate().all(|(f, face)| face.start == 4 * f && face.end == 4 * f + 4) {
+            return false;
+        }
+        let (loops, across) = (if layout == 0 { &BOX_FACES } else { &BOX_FACES_REVERSED }, &BOX_ACROSS[layout]);
         for f in 0..6 {
             if !removed[f] {
                 continue;
