@@ -818,7 +818,9 @@ impl ConvexPolyhedron {
             let Some(&first) = loop_indices.first() else { continue };
             for (k, &a) in loop_indices.iter().enumerate() {
                 let b = loop_indices.get(k + 1).copied().unwrap_or(first);
-                if a >= 64 || b >= 64 {
+                // (`b` is checked as the start of the loop's next edge
+                // before the lookups below read `head[b]`.)
+                if a >= 64 {
                     return false;
                 }
                 edges[count] = (b as u8, f as u8, head[a]);
