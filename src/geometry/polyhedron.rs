@@ -333,9 +333,10 @@ impl ConvexPolyhedron {
         self.vertices.extend((0..8).map(|i| {
             DVec3::new(pick(i & 1 != 0, min.x, max.x), pick(i & 2 != 0, min.y, max.y), pick(i & 4 != 0, min.z, max.z))
         }));
-        for (indices, plane) in BOX_FACES.iter().zip(box_planes(min, max)) {
-            self.push_face(plane, indices);
-        }
+        // The loops at once, then their spans (what `push_face` per face makes).
+        self.indices.extend_from_slice(&BOX_INDICES[0]);
+        let planes = box_planes(min, max);
+        self.faces.extend((0..6).map(|f| FaceSpan { plane: planes[f], start: 4 * f, end: 4 * f + 4 }));
     }
 
     /// Appends a face with the given loop.
@@ -384,7 +385,7 @@ impl ConvexPolyhedron {
         let centroid = corners.iter().sum::<DVec3>() / 8.0;
 
         let mut inward = 0;
-        for indices in &BOX_FACES {
+        for (f, indices) in BOX_FACES.iter().enumerate() {
             let quad = indices.map(|i| corners[i]);
             let center = quad.iter().sum::<DVec3>() / 4.0;
             let newell: DVec3 = (0..4).map(|k| (quad[k] - center).cross(quad[(k + 1) % 4] - center)).sum();
@@ -400,15 +401,17 @@ impl ConvexPolyhedron {
                 self.clear();
                 return false;
             }
-            self.push_face(plane, indices);
+            self.faces.push(FaceSpan { plane, start: 4 * f, end: 4 * f + 4 });
         }
+        // The loops at once (what `push_face` per face makes), each reversed
+        // with its plane flipped when the corners are mirrored.
         match inward {
-            0 => {}
+            0 => self.indices.extend_from_slice(&BOX_INDICES[0]),
             6 => {
                 for span in &mut self.faces {
                     span.plane = span.plane.flipped();
-                    self.indices[span.start..span.end].reverse();
                 }
+                self.indices.extend_from_slice(&BOX_INDICES[1]);
             }
             _ => {
                 self.clear();
