@@ -250,17 +250,20 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
     }
     let lines = &lines[..n];
     let start = kept.len();
-    let mut open = [Edge::default(); 8];
+    // The open edges of a block, with their indices; the survivors per
+    // edge they first fail (the caps' sizes, for their order below).
+    let mut open = [(Edge::default(), 0); 8];
+    let mut sizes = [0usize; 8];
     for (block, bounds) in points.chunks(BLOCK).zip(boxes.chunks_exact(2)) {
         let (block_lo, block_hi) = (bounds[0], bounds[1]);
         // The edges whose inside the block's box is not in: the box's corner
         // lowest on the edge's inside function decides.
         let mut m = 0;
-        for line in lines {
+        for (i, line) in lines.iter().enumerate() {
             let x = if line.dy >= 0.0 { block_hi.x } else { block_lo.x };
             let y = if line.dx >= 0.0 { block_lo.y } else { block_hi.y };
             if !line.inside(DVec2::new(x, y)) {
-                open[m] = *line;
+                open[m] = (*line, i);
                 m += 1;
             }
         }
@@ -269,12 +272,18 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
         }
         let open = &open[..m];
         for &p in block {
-            if !open.iter().all(|line| line.inside(p)) {
+            if let Some(&(_, i)) = open.iter().find(|(line, _)| !line.inside(p)) {
                 kept.push(p);
+                sizes[i] += 1;
             }
         }
     }
-    let survivors = refine_caps(&corners[..n], lines, &mut kept[start..], scale);
+    // The largest caps first: each cap's partition reads the points no
+    // earlier cap took.
+    let mut order = [0, 1, 2, 3, 4, 5, 6, 7];
+    let order = &mut order[..n];
+    order.sort_unstable_by_key(|&i| core::cmp::Reverse(sizes[i]));
+    let survivors = refine_caps(&corners[..n], lines, order, &mut kept[start..], scale);
     kept.truncate(start + survivors);
     true
 }
@@ -331,15 +340,16 @@ const CAP_DEPTH: u32 = 24;
 
 /// The octagon's survivors thinned again: each goes to the cap of the first
 /// edge of `corners` (a convex polygon of input points, counter-clockwise,
-/// `lines` its edges) that it is not strictly inside, and [`refine_cap`]
-/// drops what it can there. Moves the points that may be hull vertices to
-/// the front of `points` and returns their count; a point inside every edge
-/// (none: each survivor failed one) is kept.
-fn refine_caps(corners: &[DVec2], lines: &[Edge], points: &mut [DVec2], scale: f64) -> usize {
+/// `lines` its edges), in the edges' `order`, that it is not strictly
+/// inside, and [`refine_cap`] drops what it can there. Moves the points that
+/// may be hull vertices to the front of `points` and returns their count; a
+/// point inside every edge (none: each survivor failed one) is kept.
+fn refine_caps(corners: &[DVec2], lines: &[Edge], order: &[usize], points: &mut [DVec2], scale: f64) -> usize {
     let (mut out, mut start) = (0, 0);
-    for (i, line) in lines.iter().enumerate() {
+    for &i in order {
         // This edge's cap: the points not strictly inside it, to the front
         // of the points no cap has taken yet.
+        let line = lines[i];
         let mut end = start;
         for j in start..points.len() {
             if !line.inside(points[j]) {
