@@ -965,6 +965,11 @@ impl PixelWork<'_> {
                 let along = |t: DVec3| to_light(rows, t.extend(0.0));
                 BoundarySample { light: samples.frame.homogeneous(world), d_dx: along(tx), d_dy: along(ty) }
             }
+            // Where the raw homogeneous point had `w < 0`, `x_light` is the
+            // flipped point while `dx4`/`dy4` keep their raw sign: that turns
+            // the sample's Jacobian into `−J`; the badness (`‖J‖²/det²`) is
+            // even in `J` and its gradient through the derivatives unchanged,
+            // so it is harmless (issue-15 note, session 14, coordinator).
             Surface::Depth { dx4, dy4, .. } => {
                 BoundarySample { light: x_light, d_dx: to_light(rows, dx4), d_dy: to_light(rows, dy4) }
             }
