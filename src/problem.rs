@@ -197,18 +197,37 @@ impl ShadowProblem {
         }
     }
 
-    /// The vertices of `body` that [`Self::mappable_vertices`] leaves out
-    /// (those within [`Self::coarse_eps`] of a positional light; none for a
-    /// directional one), into `out` (cleared first): with the mappable ones
-    /// they are every vertex, so a caller holding the mappable vertices
-    /// needs only these besides for the body's depth range.
-    pub(crate) fn unmappable_vertices_into(&self, body: &ConvexPolyhedron, out: &mut Vec<DVec3>) {
-        out.clear();
+    /// [`Self::mappable_vertices_into`] into `mapped`, and the vertices it
+    /// leaves out (those within [`Self::coarse_eps`] of a positional light;
+    /// none for a directional one) into `unmapped`, both cleared first, in
+    /// one pass over the vertices. With the mappable ones the unmapped are
+    /// every vertex, so a caller holding the mappable vertices needs only
+    /// these besides for the body's depth range.
+    pub(crate) fn split_vertices_into(
+        &self,
+        body: &ConvexPolyhedron,
+        mapped: &mut Vec<DVec3>,
+        unmapped: &mut Vec<DVec3>,
+        ws: &mut SolveWorkspace,
+    ) {
+        unmapped.clear();
         let Some(l) = self.light.position() else {
+            self.mappable_vertices_into(body, mapped, ws);
             return;
         };
+        mapped.clear();
         let at_light = self.coarse_eps();
-        out.extend(body.vertices().iter().copied().filter(|&p| !((p - l).length() > at_light)));
+        for &p in body.vertices() {
+            if (p - l).length() > at_light {
+                mapped.push(p);
+            } else {
+                unmapped.push(p);
+            }
+        }
+        if mapped.is_empty() && matches!(self.light, Light::Spot { .. }) {
+            // The spot's stand-in points (`mappable_vertices_into`).
+            self.mappable_vertices_into(body, mapped, ws);
+        }
     }
 
     /// The view frustum `V` as the six half-spaces of the camera's clip volume.

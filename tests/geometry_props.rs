@@ -716,3 +716,113 @@ proptest! {
         prop_assert!((a.volume() + b.volume() - body.volume()).abs() <= 1e-9 * body.volume());
     }
 }
+
+// ---------------------------------------------------------------------------
+// Planar hull: the thinned hull against a plain monotone chain
+// ---------------------------------------------------------------------------
+
+/// Andrew's monotone chain with Shewchuk's exact orientation and no
+/// thinning: the oracle of `convex_hull_2d` (which thins inputs of more than
+/// 64 points before its chain).
+fn plain_hull(points: &[glam::DVec2]) -> Vec<glam::DVec2> {
+    use glam::DVec2;
+    let orient = |a: DVec2, b: DVec2, c: DVec2| {
+        robust::orient2d(
+            robust::Coord { x: a.x, y: a.y },
+            robust::Coord { x: b.x, y: b.y },
+            robust::Coord { x: c.x, y: c.y },
+        )
+    };
+    let mut sorted: Vec<DVec2> = points.iter().copied().filter(|p| p.is_finite()).collect();
+    sorted.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    sorted.dedup();
+    if sorted.len() <= 2 {
+        return sorted;
+    }
+    let mut hull: Vec<DVec2> = Vec::new();
+    for &p in &sorted {
+        while hull.len() >= 2 && !(orient(hull[hull.len() - 2], hull[hull.len() - 1], p) > 0.0) {
+            hull.pop();
+        }
+        hull.push(p);
+    }
+    let lower = hull.len();
+    for &p in sorted.iter().rev().skip(1) {
+        while hull.len() > lower && !(orient(hull[hull.len() - 2], hull[hull.len() - 1], p) > 0.0) {
+            hull.pop();
+        }
+        hull.push(p);
+    }
+    hull.pop();
+    hull
+}
+
+/// Large point sets of the shapes that reach the thinning's edges: a
+/// readback's pixels (in row order) through random perspective maps,
+/// integer grids (collinear runs on the thinning polygons' edges), points
+/// exactly on the edges of a polygon, repeated points, one line, a circle
+/// with points an ulp inside; at scales from 1e-300 (products underflow)
+/// to 1e300 (products overflow) and far from the origin. The hull is the
+/// plain chain's, bit for bit, through both entry points.
+#[test]
+fn planar_hull_thinning_keeps_the_hull() {
+    use glam::DVec2;
+    use lixel::fit::{convex_hull_2d, convex_hull_2d_into};
+    let mut rng = rng(0x48_1516_2342);
+    let (mut scratch, mut reused) = (Vec::new(), Vec::new());
+    for case in 0..cases(600) {
+        let n = rng.random_range(65..4000usize);
+        let w = rng.random_range(5..120usize);
+        let shape = case % 8;
+        let (h1, h2, h3) = (rng.random_range(-0.02..0.02), rng.random_range(-0.02..0.02), rng.random_range(-1.0..1.0));
+        let mut points: Vec<DVec2> = (0..n)
+            .map(|k| {
+                let (px, py) = ((k % w) as f64, (k / w) as f64);
+                match shape {
+                    0 | 1 => {
+                        let q = 1.0 + h1 * px + h2 * py;
+                        DVec2::new((px + h3 * py) / q, (py - 0.2 * px) / q)
+                    }
+                    2 => DVec2::new(px, py),
+                    3 => {
+                        // On the edges of an octagon with integer corners.
+                        let corners = [(0, -8), (6, -6), (8, 0), (6, 6), (0, 8), (-6, 6), (-8, 0), (-6, -6)];
+                        let (i, t) = (k % 8, (k / 8 % 32) as f64 / 32.0);
+                        let (a, b) = (corners[i], corners[(i + 1) % 8]);
+                        let (a, b) = (DVec2::new(a.0 as f64, a.1 as f64), DVec2::new(b.0 as f64, b.1 as f64));
+                        if k % 5 == 0 {
+                            (a + (b - a) * t) * 0.5
+                        } else {
+                            a + (b - a) * t
+                        }
+                    }
+                    4 => DVec2::new((k % 13) as f64 * 0.5, (k % 7) as f64 * 0.25),
+                    5 => DVec2::new(k as f64 * 0.75, k as f64 * -1.5 + 2.0),
+                    6 => {
+                        let a = rng.random_range(0.0..core::f64::consts::TAU);
+                        DVec2::from_angle(a) * (1.0 - f64::EPSILON * (k % 3) as f64)
+                    }
+                    _ => DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
+                }
+            })
+            .collect();
+        let scale = [1.0, 1e-300, 1e-160, 1e-20, 1e20, 1e150, 1e300, 7.0][rng.random_range(0..8)];
+        let offset = if rng.random_bool(0.2) { DVec2::new(3e8, -1e9) } else { DVec2::ZERO };
+        for p in &mut points {
+            // `+ 0.0` turns −0.0 into 0.0: the two tie in the sort, and
+            // which one a hull keeps is unspecified.
+            *p = *p * scale + offset + DVec2::ZERO;
+        }
+        if case % 3 == 2 {
+            for i in (1..points.len()).rev() {
+                points.swap(i, rng.random_range(0..=i));
+            }
+        }
+        let expected = plain_hull(&points);
+        let bits = |h: &[DVec2]| h.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect::<Vec<_>>();
+        let context = format!("case {case}: shape {shape}, {n} points, scale {scale:e}");
+        assert_eq!(bits(&convex_hull_2d(&points)), bits(&expected), "{context}");
+        convex_hull_2d_into(&points, &mut scratch, &mut reused);
+        assert_eq!(bits(&reused), bits(&expected), "{context}");
+    }
+}

@@ -83,41 +83,84 @@ const AKL_TOUSSAINT_MIN_POINTS: usize = 64;
 /// many blocks are small and far inside.
 const BLOCK: usize = 16;
 
-/// `(min, max)` of `x`, `y`, `x + y` and `x − y` over `points`, in that
-/// order, and the sum of the `x + y`: not finite when a point is not (or,
-/// harmlessly, when the sum overflows).
+/// `(min, max)` of `x` and of `y` over `points` (their bounding box) and the
+/// sum of the `x + y`: not finite when a point is not (or, harmlessly, when
+/// the sum overflows).
 #[inline]
-fn block_extremes(points: &[DVec2]) -> ([f64; 4], [f64; 4], f64) {
-    let mut lo = [f64::INFINITY; 4];
-    let mut hi = [f64::NEG_INFINITY; 4];
-    let mut sum = 0.0;
+fn block_box(points: &[DVec2]) -> (DVec2, DVec2, f64) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    let mut sum = [0.0; 2];
     for p in points {
-        let keys = [p.x, p.y, p.x + p.y, p.x - p.y];
-        sum += keys[2];
-        for k in 0..4 {
-            // Selects, not `f64::min`: one `minpd` for two keys.
+        let keys = [p.x, p.y];
+        for k in 0..2 {
+            sum[k] += keys[k];
+            // Selects, not `f64::min`: one `minpd` for both keys.
             lo[k] = if keys[k] < lo[k] { keys[k] } else { lo[k] };
             hi[k] = if keys[k] > hi[k] { keys[k] } else { hi[k] };
         }
     }
-    (lo, hi, sum)
+    (DVec2::from(lo), DVec2::from(hi), sum[0] + sum[1])
 }
 
-/// Akl–Toussaint: appends to `kept`, in order, every point of `points` that
-/// is not strictly inside the octagon spanned by the extreme points in x, y,
-/// x + y and x − y (those cannot be hull vertices), in two linear passes, and
+/// The greatest `key` over `points` and the first block of [`BLOCK`] points
+/// that holds it, reading only the blocks whose `bound` (of the block's box
+/// in `boxes`, at least `key` of every point in the box) reaches the
+/// greatest `key` of the block with the greatest bound: no other block can
+/// hold the greatest. The same value and block as reading every block in
+/// order; `None` when no point's key is above `-∞` (or a key is NaN).
+fn first_greatest(
+    points: &[DVec2],
+    boxes: &[DVec2],
+    key: impl Fn(DVec2) -> f64,
+    bound: impl Fn(DVec2, DVec2) -> f64,
+) -> Option<(f64, usize)> {
+    let block_max = |b: usize| {
+        let block = &points[b * BLOCK..((b + 1) * BLOCK).min(points.len())];
+        block.iter().fold(f64::NEG_INFINITY, |m, &p| if key(p) > m { key(p) } else { m })
+    };
+    let (mut top, mut top_block) = (f64::NEG_INFINITY, 0);
+    for (b, bounds) in boxes.chunks_exact(2).enumerate() {
+        let u = bound(bounds[0], bounds[1]);
+        if u > top {
+            (top, top_block) = (u, b);
+        }
+    }
+    let floor = block_max(top_block);
+    let (mut best, mut best_block) = (f64::NEG_INFINITY, None);
+    for (b, bounds) in boxes.chunks_exact(2).enumerate() {
+        if bound(bounds[0], bounds[1]) >= floor {
+            let m = block_max(b);
+            if m > best {
+                (best, best_block) = (m, Some(b));
+            }
+        }
+    }
+    best_block.map(|b| (best, b))
+}
+
+/// Akl–Toussaint, then quickhull's first steps: appends to `kept` (in no
+/// particular order) the points of `points` that may be hull vertices and
 /// returns `true`; or returns `false`, appending nothing, when a point may
 /// not be finite. A point is dropped only when plain floating-point
-/// orientation tests put it inside every edge by a margin far above their
-/// rounding error, so hull vertices are never dropped.
+/// orientation tests put it inside every edge of a polygon or triangle whose
+/// corners are input points by a margin far above their rounding error (it
+/// is then strictly inside the hull), so hull vertices are never dropped.
 ///
-/// The inside test runs per block of [`BLOCK`] points first: the corner of
-/// the block's bounding box lowest on each edge's inside function decides for
-/// the whole block (the box is convex and the test affine), and only the
-/// edges that corner fails are tested per point. The first pass leaves the
-/// blocks' boxes in `boxes` (`min`, `max` per block).
+/// First the octagon spanned by the extreme points in x, y, x + y and x − y,
+/// in two linear passes. Its inside test runs per block of [`BLOCK`] points
+/// first: the corner of the block's bounding box lowest on each edge's
+/// inside function decides for the whole block (the box is convex and the
+/// test affine), and only the edges that corner fails are tested per point.
+/// The first pass leaves the blocks' boxes in `boxes` (`min`, `max` per
+/// block). Then the octagon's survivors, in the caps outside its edges,
+/// go through [`refine_caps`]: on a readback's samples the octagon leaves
+/// a few to a few dozen percent, the caps' triangles a few dozen points.
 fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut Vec<DVec2>) -> bool {
-    // The extremes of the four keys and the first block that reaches each.
+    // The extremes of the four keys and the first block that reaches each:
+    // `x` and `y` from every block's box, `x ± y` from the few blocks whose
+    // box may hold them (the bounds are the keys of the box's corners:
+    // rounding is monotone, so no point's key passes its box's).
     let mut lo = [f64::INFINITY; 4];
     let mut hi = [f64::NEG_INFINITY; 4];
     let (mut lo_block, mut hi_block) = ([0; 4], [0; 4]);
@@ -125,11 +168,11 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
     boxes.clear();
     boxes.reserve(2 * points.len().div_ceil(BLOCK));
     for (b, block) in points.chunks(BLOCK).enumerate() {
-        let (block_lo, block_hi, block_sum) = block_extremes(block);
+        let (block_lo, block_hi, block_sum) = block_box(block);
         sum += block_sum;
-        boxes.push(DVec2::new(block_lo[0], block_lo[1]));
-        boxes.push(DVec2::new(block_hi[0], block_hi[1]));
-        for k in 0..4 {
+        boxes.push(block_lo);
+        boxes.push(block_hi);
+        for k in 0..2 {
             if block_lo[k] < lo[k] {
                 lo[k] = block_lo[k];
                 lo_block[k] = b;
@@ -143,8 +186,27 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
     if !sum.is_finite() {
         return false;
     }
+    // The least `x ± y` as the greatest `−(x ± y)`: negation is exact.
+    let diagonals = [
+        first_greatest(points, boxes, |p| p.x + p.y, |_, h| h.x + h.y).map(|(v, b)| (2, false, v, b)),
+        first_greatest(points, boxes, |p| -(p.x + p.y), |l, _| -(l.x + l.y)).map(|(v, b)| (2, true, -v, b)),
+        first_greatest(points, boxes, |p| p.x - p.y, |l, h| h.x - l.y).map(|(v, b)| (3, false, v, b)),
+        first_greatest(points, boxes, |p| -(p.x - p.y), |l, h| -(l.x - h.y)).map(|(v, b)| (3, true, -v, b)),
+    ];
+    for diagonal in diagonals {
+        // Finite points have finite keys unless a sum overflows: then
+        // thin nothing.
+        let Some((k, least, value, block)) = diagonal else {
+            return false;
+        };
+        if least {
+            (lo[k], lo_block[k]) = (value, block);
+        } else {
+            (hi[k], hi_block[k]) = (value, block);
+        }
+    }
     // The first point of that block with the extreme value (the same
-    // expressions as `block_extremes`, so the same bits).
+    // expressions as `block_box` and `first_greatest`, so the same bits).
     let key = |p: &DVec2, k: usize| [p.x, p.y, p.x + p.y, p.x - p.y][k];
     let corner = |block: usize, k: usize, value: f64| {
         let block = &points[block * BLOCK..((block + 1) * BLOCK).min(points.len())];
@@ -177,33 +239,31 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
         return true;
     }
     // Each edge `a → b` as the line `dx·y − dy·x − c` (positive inside),
-    // with a margin above its rounding error: every term is at most
-    // `(|dx| + |dy|)·scale`, and the few roundings of the test, of `c` and
-    // of `b − a` each err by an `f64::EPSILON` of that, so `1e-12` of it is
-    // thousands of times the error. Points are far from the origin compared
-    // with their spread only when the spread is tiny; then fewer are
-    // dropped, never a vertex. The blocks' box corners are made of the
-    // points' coordinates, so the same bound holds for them.
+    // with a margin above its rounding error ([`Edge`]). Points are far
+    // from the origin compared with their spread only when the spread is
+    // tiny; then fewer are dropped, never a vertex. The blocks' box corners
+    // are made of the points' coordinates, so the same bound holds for them.
     let scale = lo[0].abs().max(hi[0].abs()).max(lo[1].abs()).max(hi[1].abs());
-    let mut lines = [(0.0, 0.0, 0.0, 0.0); 8];
+    let mut lines = [Edge::default(); 8];
     for (i, line) in lines[..n].iter_mut().enumerate() {
-        let (a, b) = (corners[i], corners[(i + 1) % n]);
-        let d = b - a;
-        *line = (d.x, d.y, d.x * a.y - d.y * a.x, 1e-12 * (d.x.abs() + d.y.abs()) * scale);
+        *line = Edge::new(corners[i], corners[(i + 1) % n], scale);
     }
     let lines = &lines[..n];
-    let inside = |&(dx, dy, c, margin): &(f64, f64, f64, f64), x: f64, y: f64| dx * y - dy * x - c > margin;
-    let mut open = [(0.0, 0.0, 0.0, 0.0); 8];
+    let start = kept.len();
+    // The open edges of a block, with their indices; the survivors per
+    // edge they first fail (the caps' sizes, for their order below).
+    let mut open = [(Edge::default(), 0); 8];
+    let mut sizes = [0usize; 8];
     for (block, bounds) in points.chunks(BLOCK).zip(boxes.chunks_exact(2)) {
         let (block_lo, block_hi) = (bounds[0], bounds[1]);
         // The edges whose inside the block's box is not in: the box's corner
         // lowest on the edge's inside function decides.
         let mut m = 0;
-        for line in lines {
-            let x = if line.1 >= 0.0 { block_hi.x } else { block_lo.x };
-            let y = if line.0 >= 0.0 { block_lo.y } else { block_hi.y };
-            if !inside(line, x, y) {
-                open[m] = *line;
+        for (i, line) in lines.iter().enumerate() {
+            let x = if line.dy >= 0.0 { block_hi.x } else { block_lo.x };
+            let y = if line.dx >= 0.0 { block_lo.y } else { block_hi.y };
+            if !line.inside(DVec2::new(x, y)) {
+                open[m] = (*line, i);
                 m += 1;
             }
         }
@@ -212,12 +272,161 @@ fn keep_possible_vertices(points: &[DVec2], boxes: &mut Vec<DVec2>, kept: &mut V
         }
         let open = &open[..m];
         for &p in block {
-            if !open.iter().all(|line| inside(line, p.x, p.y)) {
+            if let Some(&(_, i)) = open.iter().find(|(line, _)| !line.inside(p)) {
                 kept.push(p);
+                sizes[i] += 1;
             }
         }
     }
+    // The largest caps first: each cap's partition reads the points no
+    // earlier cap took.
+    let mut order = [0, 1, 2, 3, 4, 5, 6, 7];
+    let order = &mut order[..n];
+    order.sort_unstable_by_key(|&i| core::cmp::Reverse(sizes[i]));
+    let survivors = refine_caps(&corners[..n], lines, order, &mut kept[start..], scale);
+    kept.truncate(start + survivors);
     true
+}
+
+/// The line through two input points `a → b` as `dx·y − dy·x − c`
+/// (positive left of it), with a margin above the rounding error of that
+/// expression: every term is at most `(|dx| + |dy|)·scale` when `scale`
+/// bounds the absolute coordinates of `a`, `b` and the point tested, and
+/// the few roundings of the test, of `c` and of `b − a` each err by an
+/// `f64::EPSILON` of that, so `1e-12` of it is thousands of times the
+/// error; `f64::MIN_POSITIVE` more covers products that underflow (their
+/// error is absolute, at most a subnormal's ulp each). A value above the
+/// margin means the point is strictly left of the exact line; an overflow
+/// makes the value or the margin infinite or NaN, and then the test fails
+/// (the point is kept).
+#[derive(Clone, Copy, Default)]
+struct Edge {
+    dx: f64,
+    dy: f64,
+    c: f64,
+    margin: f64,
+}
+
+impl Edge {
+    #[inline]
+    fn new(a: DVec2, b: DVec2, scale: f64) -> Self {
+        let d = b - a;
+        let margin = 1e-12 * (d.x.abs() + d.y.abs()) * scale + f64::MIN_POSITIVE;
+        Self { dx: d.x, dy: d.y, c: d.x * a.y - d.y * a.x, margin }
+    }
+
+    #[inline]
+    fn value(&self, p: DVec2) -> f64 {
+        self.dx * p.y - self.dy * p.x - self.c
+    }
+
+    /// `p` strictly left of the line, by more than the margin.
+    #[inline]
+    fn inside(&self, p: DVec2) -> bool {
+        self.value(p) > self.margin
+    }
+
+    /// `p` strictly right of the line, by more than the margin.
+    #[inline]
+    fn outside(&self, p: DVec2) -> bool {
+        self.value(p) < -self.margin
+    }
+}
+
+/// Levels of [`refine_cap`]'s recursion at most: past it a cap's points are
+/// all kept. Each level splits a cap in two; 24 is far more than the
+/// survivors of real inputs need (a few), and bounds the stack.
+const CAP_DEPTH: u32 = 24;
+
+/// The octagon's survivors thinned again: each goes to the cap of the first
+/// edge of `corners` (a convex polygon of input points, counter-clockwise,
+/// `lines` its edges), in the edges' `order`, that it is not strictly
+/// inside, and [`refine_cap`] drops what it can there. Moves the points that
+/// may be hull vertices to the front of `points` and returns their count; a
+/// point inside every edge (none: each survivor failed one) is kept.
+fn refine_caps(corners: &[DVec2], lines: &[Edge], order: &[usize], points: &mut [DVec2], scale: f64) -> usize {
+    let (mut out, mut start) = (0, 0);
+    for &i in order {
+        // This edge's cap: the points not strictly inside it, to the front
+        // of the points no cap has taken yet.
+        let line = lines[i];
+        let mut end = start;
+        for j in start..points.len() {
+            if !line.inside(points[j]) {
+                points.swap(j, end);
+                end += 1;
+            }
+        }
+        let kept = refine_cap(corners[i], corners[(i + 1) % corners.len()], &mut points[start..end], scale, CAP_DEPTH);
+        points.copy_within(start..start + kept, out);
+        out += kept;
+        start = end;
+    }
+    let rest = points.len() - start;
+    points.copy_within(start.., out);
+    out + rest
+}
+
+/// One step of quickhull on `points`, input points none of which is
+/// strictly inside the edge `a → b` (`a`, `b` input points too): the point
+/// `c` farthest outside the edge (the least value of [`Edge::value`])
+/// makes the triangle `a, c, b` of input points; a point strictly inside
+/// it by the margin on all three edges is strictly inside the hull, so not
+/// a vertex, and is dropped. The points not strictly inside `a → c` and
+/// those not strictly inside `c → b` are thinned the same way against those
+/// edges (`depth` levels more at most). Moves the points that may be hull
+/// vertices to the front and returns their count; keeps them all when no
+/// point is outside `a → b` by more than the margin.
+///
+/// Only ever drops points strictly inside a triangle of input points,
+/// whatever `c` rounding picked: correct for any input, effective when the
+/// caps are thin.
+fn refine_cap(a: DVec2, b: DVec2, points: &mut [DVec2], scale: f64, depth: u32) -> usize {
+    let n = points.len();
+    if n <= 1 || depth == 0 {
+        return n;
+    }
+    let ab = Edge::new(a, b, scale);
+    let (mut far, mut least) = (0, ab.value(points[0]));
+    for (i, &p) in points.iter().enumerate().skip(1) {
+        let v = ab.value(p);
+        if v < least {
+            (far, least) = (i, v);
+        }
+    }
+    if !(least < -ab.margin) {
+        return n;
+    }
+    let c = points[far];
+    let (ac, cb) = (Edge::new(a, c, scale), Edge::new(c, b, scale));
+    // [not inside a → c | not inside c → b | the rest kept], the points
+    // strictly inside the triangle after them.
+    let mut left = 0;
+    for i in 0..n {
+        if !ac.inside(points[i]) {
+            points.swap(i, left);
+            left += 1;
+        }
+    }
+    let mut right = left;
+    for i in left..n {
+        if !cb.inside(points[i]) {
+            points.swap(i, right);
+            right += 1;
+        }
+    }
+    let mut kept = right;
+    for i in right..n {
+        if !ab.outside(points[i]) {
+            points.swap(i, kept);
+            kept += 1;
+        }
+    }
+    let l = refine_cap(a, c, &mut points[..left], scale, depth - 1);
+    let r = refine_cap(c, b, &mut points[left..right], scale, depth - 1);
+    points.copy_within(left..left + r, l);
+    points.copy_within(right..kept, l + r);
+    l + r + (kept - right)
 }
 
 /// Allocation-free form of [`convex_hull_2d`].
@@ -431,10 +640,10 @@ mod tests {
     #[test]
     fn thinning_keeps_the_hull() {
         let mut next = crate::test_rng::unit(0x9E37_79B9_7F4A_7C15_u64);
-        for case in 0..200 {
-            let n = 65 + case * 37;
+        for case in 0..300 {
+            let n = 65 + case * 23;
             let points: Vec<DVec2> = (0..n)
-                .map(|k| match case % 7 {
+                .map(|k| match case % 10 {
                     0 => v(next(), next()),
                     1 => {
                         let a = next() * std::f64::consts::TAU;
@@ -484,6 +693,167 @@ mod tests {
             // Monotone chain without thinning.
             chain(&plain, &mut expected);
             assert_eq!(convex_hull_2d(&points), expected, "case {case}");
+        }
+    }
+
+    /// Point sets of many shapes, at many scales: the thinning (octagon and
+    /// caps) keeps every hull vertex and drops only points strictly inside
+    /// the hull (checked with the exact `orient` against the unthinned
+    /// chain's hull), and the hull is the unthinned one bit for bit.
+    #[test]
+    fn thinning_drops_only_interior_points() {
+        let mut next = crate::test_rng::unit(0x2545_F491_4F6C_DD1D_u64);
+        let mut dropped_total = 0;
+        for case in 0..700 {
+            let n = 65 + (next() * 2500.0) as usize;
+            let shape = case % 10;
+            let w = 8 + case % 41;
+            let tilt = next() * 0.05;
+            let mut points: Vec<DVec2> = (0..n)
+                .map(|k| match shape {
+                    // Integer grid: long collinear runs on the octagon's edges.
+                    0 => v((k % w) as f64, (k / w) as f64),
+                    // A grid's points with x + y and x − y bounded: an
+                    // octagon of integer corners, its edges full of points.
+                    1 => {
+                        let (x, y) = ((k % 31) as f64 - 15.0, ((k / 31) % 31) as f64 - 15.0);
+                        if x.abs() + y.abs() <= 21.0 {
+                            v(x, y)
+                        } else {
+                            v(x * 0.5, y * 0.5)
+                        }
+                    }
+                    // A readback's pixels through a perspective map, rows
+                    // of `w`.
+                    2 => {
+                        let (px, py) = ((k % w) as f64, (k / w) as f64);
+                        let q = 1.0 + tilt * px + 0.02 * py;
+                        v((px + 0.3 * py) / q, (py - 0.1 * px) / q)
+                    }
+                    // On a circle (all vertices) and just inside.
+                    3 => {
+                        let a = next() * std::f64::consts::TAU;
+                        v(a.cos(), a.sin()) * if k % 2 == 0 { 1.0 } else { 1.0 - f64::EPSILON * (k % 5) as f64 }
+                    }
+                    // Random in a thin rotated ellipse.
+                    4 => {
+                        let (a, r) = (next() * std::f64::consts::TAU, next().sqrt());
+                        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+                        let (x, y) = (r * a.cos() * 100.0, r * a.sin() * 0.01);
+                        v(c * x - s * y, s * x + c * y)
+                    }
+                    // Each point two or three times, from a small set.
+                    5 => {
+                        let j = (k / 3) % 40;
+                        v((j % 7) as f64 * 0.25, (j / 7) as f64 * 0.5)
+                    }
+                    // Collinear: every point on one line.
+                    6 => v(k as f64 * 3.0, k as f64 * -2.0),
+                    // A square's edges, a hair inside or outside.
+                    7 => {
+                        let (t, hair) = (next(), (next() - 0.5) * 1e-13);
+                        match k % 4 {
+                            0 => v(t, -hair),
+                            1 => v(1.0 + hair, t),
+                            2 => v(t, 1.0 + hair),
+                            _ => v(-hair, t),
+                        }
+                    }
+                    // A polygon's vertices with points on its edges
+                    // (exactly: dyadic steps) and inside.
+                    8 => {
+                        let corners =
+                            [v(0.0, 0.0), v(8.0, 0.0), v(12.0, 4.0), v(12.0, 8.0), v(4.0, 12.0), v(-4.0, 4.0)];
+                        let (i, t) = (k % 6, ((k / 6) % 16) as f64 / 16.0);
+                        let (a, b) = (corners[i], corners[(i + 1) % 6]);
+                        if k % 3 == 0 {
+                            v(4.0, 5.0) + (a - v(4.0, 5.0)) * t
+                        } else {
+                            a + (b - a) * t
+                        }
+                    }
+                    // Random in a square.
+                    _ => v(next(), next()),
+                })
+                .collect();
+            // Scales from tiny (products subnormal or zero) to huge
+            // (products overflow), and far from the origin.
+            let scale = [1.0, 1e-160, 1e-300, 1e150, 1e300, 3.0][case % 6];
+            let offset = if case % 7 == 3 { v(1e9, -2e9) } else { v(0.0, 0.0) };
+            for p in &mut points {
+                // `+ 0.0`: no −0.0 (it ties with 0.0 in the sort).
+                *p = *p * scale + offset + v(0.0, 0.0);
+            }
+            if case % 4 == 1 {
+                // Not in the readback's order.
+                for i in (1..points.len()).rev() {
+                    points.swap(i, (next() * (i + 1) as f64) as usize % (i + 1));
+                }
+            }
+            let mut plain: Vec<DVec2> = points.clone();
+            plain.sort_unstable_by(lexicographic);
+            plain.dedup();
+            let mut expected = Vec::new();
+            chain(&plain, &mut expected);
+            let (mut boxes, mut kept) = (Vec::new(), Vec::new());
+            let thinned = keep_possible_vertices(&points, &mut boxes, &mut kept);
+            let context = format!("case {case}, shape {shape}, scale {scale:e}, {n} points");
+            if thinned {
+                for q in &expected {
+                    assert!(
+                        kept.iter().any(|k| k.x.to_bits() == q.x.to_bits() && k.y.to_bits() == q.y.to_bits()),
+                        "{context}: vertex {q} dropped"
+                    );
+                }
+                let m = expected.len();
+                for p in &points {
+                    if !kept.contains(p) {
+                        dropped_total += 1;
+                        assert!(m >= 3, "{context}: {p} dropped from a degenerate hull");
+                        for i in 0..m {
+                            assert!(
+                                orient(expected[i], expected[(i + 1) % m], *p) > 0.0,
+                                "{context}: dropped {p} not strictly inside"
+                            );
+                        }
+                    }
+                }
+            }
+            let hull = convex_hull_2d(&points);
+            assert_eq!(hull.len(), expected.len(), "{context}");
+            for (a, b) in hull.iter().zip(&expected) {
+                assert_eq!((a.x.to_bits(), a.y.to_bits()), (b.x.to_bits(), b.y.to_bits()), "{context}");
+            }
+        }
+        // The thinning did drop points (else the checks above check nothing).
+        assert!(dropped_total > 100_000, "{dropped_total}");
+    }
+
+    /// The caps thin a readback-like grid and a random disk to a few dozen
+    /// points, where the octagon alone leaves far more.
+    #[test]
+    fn caps_leave_few_points() {
+        let mut next = crate::test_rng::unit(0x1234_5678_9ABC_DEF1_u64);
+        // A disk of pixels through a perspective map (its edge pixels are
+        // not collinear, unlike a rectangle's rows).
+        let grid: Vec<DVec2> = (0..200 * 200)
+            .filter_map(|k| {
+                let (px, py) = ((k % 200) as f64 - 100.0, (k / 200) as f64 - 100.0);
+                let q = 3.0 + 0.004 * px + 0.01 * py;
+                (px * px + py * py < 95.0 * 95.0).then(|| v((px + 0.3 * py) / q, (py - 0.1 * px) / q))
+            })
+            .collect();
+        let disk: Vec<DVec2> = (0..20_000)
+            .map(|_| {
+                let (a, r) = (next() * std::f64::consts::TAU, next().sqrt());
+                v(a.cos(), a.sin()) * r
+            })
+            .collect();
+        for (name, points, at_most) in [("grid", &grid, 600), ("disk", &disk, 400)] {
+            let (mut boxes, mut kept) = (Vec::new(), Vec::new());
+            assert!(keep_possible_vertices(points, &mut boxes, &mut kept));
+            eprintln!("{name}: {} of {} kept", kept.len(), points.len());
+            assert!(kept.len() <= at_most, "{name}: {} kept", kept.len());
         }
     }
 

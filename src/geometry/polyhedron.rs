@@ -27,6 +27,71 @@ const BOX_FACES: [[usize; 4]; 6] = [
     [4, 5, 7, 6], // +z, far
 ];
 
+/// [`BOX_FACES`] with every loop reversed: the layout of a frustum whose
+/// corners are mirrored ([`ConvexPolyhedron::set_frustum_corners`]).
+const BOX_FACES_REVERSED: [[usize; 4]; 6] = reverse_loops(BOX_FACES);
+
+/// The loops of `faces`, each run the other way (`[a, b, c, d]` to `[d, c, b, a]`).
+const fn reverse_loops(faces: [[usize; 4]; 6]) -> [[usize; 4]; 6] {
+    let mut out = [[0; 4]; 6];
+    let mut f = 0;
+    while f < 6 {
+        let mut k = 0;
+        while k < 4 {
+            out[f][k] = faces[f][3 - k];
+            k += 1;
+        }
+        f += 1;
+    }
+    out
+}
+
+/// Per face `f` and loop edge `k` (`faces[f][k] → faces[f][k + 1]`) of a
+/// box layout, the face running the reverse edge: the last one listed, as
+/// the silhouette's lookup finds it (`u8::MAX`: none). Made at compile
+/// time from the loops themselves.
+const fn across_faces(faces: [[usize; 4]; 6]) -> [[u8; 4]; 6] {
+    let mut out = [[u8::MAX; 4]; 6];
+    let mut f = 0;
+    while f < 6 {
+        let mut k = 0;
+        while k < 4 {
+            let (a, b) = (faces[f][k], faces[f][(k + 1) % 4]);
+            let mut g = 0;
+            while g < 6 {
+                let mut m = 0;
+                while m < 4 {
+                    if faces[g][m] == b && faces[g][(m + 1) % 4] == a {
+                        out[f][k] = g as u8;
+                    }
+                    m += 1;
+                }
+                g += 1;
+            }
+            k += 1;
+        }
+        f += 1;
+    }
+    out
+}
+
+/// [`across_faces`] of [`BOX_FACES`] and of [`BOX_FACES_REVERSED`].
+const BOX_ACROSS: [[[u8; 4]; 6]; 2] = [across_faces(BOX_FACES), across_faces(BOX_FACES_REVERSED)];
+
+/// The loops of `faces` one after another, as a body's index list holds them.
+const fn flatten(faces: [[usize; 4]; 6]) -> [usize; 24] {
+    let mut out = [0; 24];
+    let mut i = 0;
+    while i < 24 {
+        out[i] = faces[i / 4][i % 4];
+        i += 1;
+    }
+    out
+}
+
+/// [`flatten`] of [`BOX_FACES`] and of [`BOX_FACES_REVERSED`].
+const BOX_INDICES: [[usize; 24]; 2] = [flatten(BOX_FACES), flatten(BOX_FACES_REVERSED)];
+
 /// One face of a [`ConvexPolyhedron`]: an outward plane and a loop of vertex
 /// indices (a view into the body).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -268,9 +333,10 @@ impl ConvexPolyhedron {
         self.vertices.extend((0..8).map(|i| {
             DVec3::new(pick(i & 1 != 0, min.x, max.x), pick(i & 2 != 0, min.y, max.y), pick(i & 4 != 0, min.z, max.z))
         }));
-        for (indices, plane) in BOX_FACES.iter().zip(box_planes(min, max)) {
-            self.push_face(plane, indices);
-        }
+        // The loops at once, then their spans (what `push_face` per face makes).
+        self.indices.extend_from_slice(&BOX_INDICES[0]);
+        let planes = box_planes(min, max);
+        self.faces.extend((0..6).map(|f| FaceSpan { plane: planes[f], start: 4 * f, end: 4 * f + 4 }));
     }
 
     /// Appends a face with the given loop.
@@ -319,7 +385,7 @@ impl ConvexPolyhedron {
         let centroid = corners.iter().sum::<DVec3>() / 8.0;
 
         let mut inward = 0;
-        for indices in &BOX_FACES {
+        for (f, indices) in BOX_FACES.iter().enumerate() {
             let quad = indices.map(|i| corners[i]);
             let center = quad.iter().sum::<DVec3>() / 4.0;
             let newell: DVec3 = (0..4).map(|k| (quad[k] - center).cross(quad[(k + 1) % 4] - center)).sum();
@@ -335,15 +401,17 @@ impl ConvexPolyhedron {
                 self.clear();
                 return false;
             }
-            self.push_face(plane, indices);
+            self.faces.push(FaceSpan { plane, start: 4 * f, end: 4 * f + 4 });
         }
+        // The loops at once (what `push_face` per face makes), each reversed
+        // with its plane flipped when the corners are mirrored.
         match inward {
-            0 => {}
+            0 => self.indices.extend_from_slice(&BOX_INDICES[0]),
             6 => {
                 for span in &mut self.faces {
                     span.plane = span.plane.flipped();
-                    self.indices[span.start..span.end].reverse();
                 }
+                self.indices.extend_from_slice(&BOX_INDICES[1]);
             }
             _ => {
                 self.clear();
@@ -674,7 +742,10 @@ impl ConvexPolyhedron {
     /// scratch.
     fn silhouette(&self, removed: &[bool], edge_faces: &mut HalfEdges, out: &mut Vec<(usize, usize, usize, usize)>) {
         out.clear();
-        if self.silhouette_small(removed, out) {
+        // (The size test here, the table out of line: other bodies pay two
+        // compares.)
+        let box_sized = self.vertices.len() == 8 && self.faces.len() == 6;
+        if (box_sized && self.silhouette_of_box(removed, out)) || self.silhouette_small(removed, out) {
             return;
         }
         out.clear();
@@ -687,6 +758,44 @@ impl ConvexPolyhedron {
                 }
             }
         }
+    }
+
+    /// [`silhouette`](Self::silhouette) for a body laid out as a box or
+    /// frustum is made (eight vertices, the six loops of [`BOX_FACES`], or
+    /// all of them reversed, in that order), such as the view frustum `V`
+    /// whose towards-light planes every PSM solve takes: the face across
+    /// each edge comes from a table made from the same loops at compile
+    /// time ([`BOX_ACROSS`]) instead of the per-call edge lists, so the
+    /// same list, appended to `out` (empty before). Returns `false`, `out`
+    /// untouched, for any other layout.
+    #[inline(never)]
+    fn silhouette_of_box(&self, removed: &[bool], out: &mut Vec<(usize, usize, usize, usize)>) -> bool {
+        if self.vertices.len() != 8 || self.faces.len() != 6 || self.indices.len() != 24 || removed.len() < 6 {
+            return false;
+        }
+        let layout = if self.indices[..] == BOX_INDICES[0] {
+            0
+        } else if self.indices[..] == BOX_INDICES[1] {
+            1
+        } else {
+            return false;
+        };
+        if !self.faces.iter().enumerate().all(|(f, face)| face.start == 4 * f && face.end == 4 * f + 4) {
+            return false;
+        }
+        let (loops, across) = (if layout == 0 { &BOX_FACES } else { &BOX_FACES_REVERSED }, &BOX_ACROSS[layout]);
+        for f in 0..6 {
+            if !removed[f] {
+                continue;
+            }
+            for k in 0..4 {
+                let g = usize::from(across[f][k]);
+                if g < 6 && !removed[g] {
+                    out.push((loops[f][k], loops[f][(k + 1) % 4], f, g));
+                }
+            }
+        }
+        true
     }
 
     /// [`silhouette`](Self::silhouette) for a small body (at most 64
@@ -712,7 +821,9 @@ impl ConvexPolyhedron {
             let Some(&first) = loop_indices.first() else { continue };
             for (k, &a) in loop_indices.iter().enumerate() {
                 let b = loop_indices.get(k + 1).copied().unwrap_or(first);
-                if a >= 64 || b >= 64 {
+                // (`b` is checked as the start of the loop's next edge
+                // before the lookups below read `head[b]`.)
+                if a >= 64 {
                     return false;
                 }
                 edges[count] = (b as u8, f as u8, head[a]);
@@ -1261,6 +1372,52 @@ mod tests {
         doubled.indices.extend_from_within(first.start..first.end);
         doubled.faces.push(FaceSpan { plane: first.plane, start, end: doubled.indices.len() });
         check(&doubled, &[false, true, true, true, true, false, false]);
+    }
+
+    /// The box layout's table gives the half-edge lookup's silhouette for
+    /// boxes and frusta of both handednesses, for every set of removed
+    /// faces; other layouts (a clipped cube, a reordered loop) are left to
+    /// the general lookup.
+    #[test]
+    fn box_silhouette_equals_the_half_edge_one() {
+        let mut half = HalfEdges::default();
+        let reference = |body: &ConvexPolyhedron, removed: &[bool], half: &mut HalfEdges| {
+            half.build(body.vertices.len(), &body.faces, &body.indices);
+            let mut list = Vec::new();
+            for (f, face) in body.faces().enumerate().filter(|&(f, _)| removed[f]) {
+                for (a, b) in face.edges() {
+                    match half.face(b, a) {
+                        Some(across) if !removed[across] => list.push((a, b, f, across)),
+                        _ => {}
+                    }
+                }
+            }
+            list
+        };
+        let bodies = [
+            unit_cube(),
+            ConvexPolyhedron::from_frustum_corners(&frustum_corners(false)).unwrap(),
+            ConvexPolyhedron::from_frustum_corners(&frustum_corners(true)).unwrap(),
+        ];
+        assert_ne!(bodies[1].indices, bodies[2].indices, "both layouts");
+        let mut edges = 0;
+        for body in &bodies {
+            for mask in 0..64u32 {
+                let removed: Vec<bool> = (0..6).map(|f| mask & (1 << f) != 0).collect();
+                let mut fast = Vec::new();
+                assert!(body.silhouette_of_box(&removed, &mut fast));
+                assert_eq!(fast, reference(body, &removed, &mut half), "mask {mask}");
+                edges += fast.len();
+            }
+        }
+        assert!(edges > 500, "{edges}");
+        let clipped = unit_cube().clip(&Plane::from_point_normal(DVec3::splat(0.9), DVec3::ONE.normalize()), 1e-12);
+        let mut reordered = unit_cube();
+        reordered.indices[0..4].rotate_left(1);
+        for body in [clipped, reordered] {
+            let removed = vec![true; body.face_count()];
+            assert!(!body.silhouette_of_box(&removed, &mut Vec::new()));
+        }
     }
 
     #[test]

@@ -199,8 +199,8 @@ fn attempt(
     key: Option<PsmAxisKey>,
     ws: &mut SolveWorkspace,
 ) -> Result<LightMatrix> {
-    let mut mapped = ws.take_points();
-    problem.mappable_vertices_into(region, &mut mapped, ws);
+    let (mut mapped, mut unmapped) = (ws.take_points(), ws.take_points());
+    problem.split_vertices_into(region, &mut mapped, &mut unmapped, ws);
     let axis = match key {
         Some(key) => match ws.view.psm_axis(&key) {
             Some(axis) => axis,
@@ -213,22 +213,24 @@ fn attempt(
         None => psm_axis(problem, options, region, &mapped, &frame, ws),
     };
     let result = match axis {
-        Some(axis) => place(problem, frame, axis, region, &mapped, focus, fallback, ws),
+        Some(axis) => place(problem, frame, axis, &mapped, &unmapped, focus, fallback, ws),
         None => Err(LixelError::NotInFront { method: Method::Psm }),
     };
+    ws.put_points(unmapped);
     ws.put_points(mapped);
     result
 }
 
-/// Map around `region` (with the visible receivers), depth over their
-/// casters; `mapped` are `region`'s mappable vertices.
+/// Map around a region (with the visible receivers), depth over their
+/// casters; `mapped` are the region's mappable vertices, `unmapped` the
+/// rest of them (next to the light).
 #[allow(clippy::too_many_arguments)]
 fn place(
     problem: &ShadowProblem,
     frame: LightFrame,
     axis: DVec3,
-    region: &ConvexPolyhedron,
     mapped: &[DVec3],
+    unmapped: &[DVec3],
     focus: &ConvexPolyhedron,
     fallback: Option<Fallback>,
     ws: &mut SolveWorkspace,
@@ -238,14 +240,13 @@ fn place(
     let mut more = ws.take_points();
     problem.mappable_vertices_into(focus, &mut more, ws);
     points.extend_from_slice(&more);
-    // Depth covers the casters of the visible receivers and all of `region`
-    // (for `H`, which holds casters itself, the light included when it lies
-    // in `S`: such a map needs unclipped depth). The depth points add to
-    // the mapped ones, which hold `region`'s mappable vertices already: only
-    // the rest of its vertices (next to the light) are passed again.
-    problem.unmappable_vertices_into(region, &mut more);
+    // Depth covers the casters of the visible receivers and all of the
+    // region (for `H`, which holds casters itself, the light included when
+    // it lies in `S`: such a map needs unclipped depth). The depth points
+    // add to the mapped ones, which hold the region's mappable vertices
+    // already: only the rest of its vertices (`unmapped`) are passed again.
     let result = problem.with_casters(focus, ws, |casters, ws| {
-        problem.placement(frame, axis, &points, &more, Some(casters), Method::Psm, fallback).build_in(ws)
+        problem.placement(frame, axis, &points, unmapped, Some(casters), Method::Psm, fallback).build_in(ws)
     });
     ws.put_points(more);
     ws.put_points(points);
