@@ -47,10 +47,41 @@
 // sample extraction (`optimize::extract`, where SSE2 is part of the build's
 // target), and the optimizer's loops compiled for AVX where the CPU has it
 // (`optimize::objective`, `optimize::holds`, `optimize::project_onto_plane`,
-// `matrix::range_of`: each behind `is_x86_feature_detected!("avx")`, the same
-// Rust as the portable loop it stands for).
+// `matrix::range_of`: each through `avx_or_portable!` below, behind
+// `is_x86_feature_detected!("avx")`, the same Rust as the portable loop it
+// stands for).
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
+
+/// `$avx` (a call of a `#[target_feature(enable = "avx")]` function) where
+/// this x86-64 CPU has AVX, else `$portable`: the one place the optimizer's
+/// AVX loops are dispatched. Each such function wraps the `#[inline(always)]`
+/// portable body that `$portable` calls, so both give the same bits.
+#[cfg(target_arch = "x86_64")]
+macro_rules! avx_or_portable {
+    ($avx:expr, $portable:expr $(,)?) => {
+        if std::arch::is_x86_feature_detected!("avx") {
+            #[allow(unsafe_code)]
+            // SAFETY: the callee's only requirement is the AVX target
+            // feature (its `#[target_feature]`), and this CPU has it
+            // (detected just above); its arguments and memory accesses are
+            // safe Rust.
+            unsafe {
+                $avx
+            }
+        } else {
+            $portable
+        }
+    };
+}
+
+/// Other targets: `$portable` (the AVX functions do not exist there).
+#[cfg(not(target_arch = "x86_64"))]
+macro_rules! avx_or_portable {
+    ($avx:expr, $portable:expr $(,)?) => {
+        $portable
+    };
+}
 
 mod camera;
 pub mod cascade;

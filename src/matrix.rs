@@ -327,17 +327,11 @@ fn fold_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 /// (the same Rust, so the same compares and the same bits).
 fn range_of(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        #[target_feature(enable = "avx")]
-        fn range_of_avx(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
-            range_of_lanes(a, b, value)
-        }
-        #[allow(unsafe_code)]
-        // SAFETY: `range_of_avx` requires AVX only, and this CPU has it
-        // (detected just above). It takes no pointers.
-        return unsafe { range_of_avx(a, b, value) };
+    #[target_feature(enable = "avx")]
+    fn range_of_avx(a: &[DVec3], b: &[DVec3], value: impl Fn(&DVec3) -> f64 + Copy) -> Option<(f64, f64)> {
+        range_of_lanes(a, b, value)
     }
-    range_of_lanes(a, b, value)
+    avx_or_portable!(range_of_avx(a, b, value), range_of_lanes(a, b, value))
 }
 
 /// The body of [`range_of`], for any target features.

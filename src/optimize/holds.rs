@@ -16,14 +16,7 @@ const LANES: usize = 4;
 /// [`holds_all`]: `homography` puts every light-coordinate point in front of
 /// the light and inside the map (`|ndc| <= 1 + slack`).
 pub(super) fn holds_all_points(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        #[allow(unsafe_code)]
-        // SAFETY: `avx::holds_all_points` requires AVX only, and this CPU
-        // has it (detected just above). It takes no pointers.
-        return unsafe { avx::holds_all_points(homography, xs, slack) };
-    }
-    holds_all_points_lanes(homography, xs, slack)
+    avx_or_portable!(avx::holds_all_points(homography, xs, slack), holds_all_points_lanes(homography, xs, slack),)
 }
 
 /// The body of [`holds_all_points`], for any target features.
@@ -55,13 +48,7 @@ fn holds_all_points_lanes(homography: &DMat3, xs: &[DVec3], slack: f64) -> bool 
 
 /// Every world point `p` has [`LightMatrix::covers`]`(p, slack)`.
 pub(super) fn covers_all(matrix: &LightMatrix, points: &[DVec3], slack: f64) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        #[allow(unsafe_code)]
-        // SAFETY: as in `holds_all_points`.
-        return unsafe { avx::covers_all(matrix, points, slack) };
-    }
-    covers_all_lanes(matrix, points, slack)
+    avx_or_portable!(avx::covers_all(matrix, points, slack), covers_all_lanes(matrix, points, slack))
 }
 
 /// The body of [`covers_all`], for any target features.

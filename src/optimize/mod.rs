@@ -214,20 +214,11 @@ fn project_onto_plane(axis: DVec3, (e1, e2): (DVec3, DVec3), xs: &[DVec3], out: 
         }
     }
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        #[target_feature(enable = "avx")]
-        fn project_avx(axis: DVec3, e1: DVec3, e2: DVec3, xs: &[DVec3], out: &mut Vec<DVec2>) {
-            project(axis, e1, e2, xs, out);
-        }
-        #[allow(unsafe_code)]
-        // SAFETY: `project_avx` requires AVX only, and this CPU has it
-        // (detected just above). It takes no pointers.
-        unsafe {
-            project_avx(axis, e1, e2, xs, out);
-        }
-        return;
+    #[target_feature(enable = "avx")]
+    fn project_avx(axis: DVec3, e1: DVec3, e2: DVec3, xs: &[DVec3], out: &mut Vec<DVec2>) {
+        project(axis, e1, e2, xs, out);
     }
-    project(axis, e1, e2, xs, out);
+    avx_or_portable!(project_avx(axis, e1, e2, xs, out), project(axis, e1, e2, xs, out));
 }
 
 /// Scene-optimizes several lights: light `i` with `optimizers[i]` (its

@@ -221,15 +221,7 @@ pub(crate) fn objective_below(
     samples: &[BoundarySample],
     bound: f64,
 ) -> Option<f64> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        #[allow(unsafe_code)]
-        // SAFETY: `avx::objective_below` requires AVX only, and this CPU
-        // has it (detected just above). It takes no pointers: its memory
-        // accesses are safe Rust.
-        return unsafe { avx::objective_below(g, groups, samples, bound) };
-    }
-    objective_below_lanes(g, groups, samples, bound)
+    avx_or_portable!(avx::objective_below(g, groups, samples, bound), objective_below_lanes(g, groups, samples, bound),)
 }
 
 /// The body of [`objective_below`], for any target features.
@@ -301,20 +293,7 @@ pub(crate) fn median_badness(
     scratch: &mut Vec<f64>,
 ) -> f64 {
     scratch.clear();
-    #[cfg(target_arch = "x86_64")]
-    let done = std::arch::is_x86_feature_detected!("avx") && {
-        #[allow(unsafe_code)]
-        // SAFETY: as in `objective_below`.
-        unsafe {
-            avx::badness_into(g, groups, samples, scratch);
-        }
-        true
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let done = false;
-    if !done {
-        badness_into_lanes(g, groups, samples, scratch);
-    }
+    avx_or_portable!(avx::badness_into(g, groups, samples, scratch), badness_into_lanes(g, groups, samples, scratch),);
     if scratch.is_empty() {
         return f64::INFINITY;
     }
